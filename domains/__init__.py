@@ -1,0 +1,1 @@
+"""Shipped example domains (package data, installed as ssr_compile.domains)."""

@@ -1,0 +1,1 @@
+"""Lark grammars for the PDDLStream dialect (package data, installed as ssr_compile.grammar)."""

@@ -1,0 +1,1 @@
+"""PyBullet kitchen simulator: world, robot, camera, executor, tasks."""

@@ -1,0 +1,1 @@
+"""Compiler passes: PDDLStream -> plain cost-PDDL, one module per pass."""

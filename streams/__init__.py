@@ -1,0 +1,1 @@
+"""Python stream implementations for the shipped domains."""
