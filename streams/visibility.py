@@ -30,8 +30,9 @@ from typing import Protocol
 import numpy as np
 import pybullet as p
 
-#: ``p.rayTestBatch`` refuses batches larger than this (pybullet's MAX_RAY_INTERSECTION_BATCH_SIZE).
-MAX_RAY_BATCH = int(getattr(p, "MAX_RAY_INTERSECTION_BATCH_SIZE", 16384))
+#: Rays per ``p.rayTestBatch`` call.  pybullet refuses more than MAX_RAY_INTERSECTION_BATCH_SIZE
+#: (16384) and, with exactly that many, silently drops the last result (pybullet 3.2.x), so one less.
+MAX_RAY_BATCH = int(getattr(p, "MAX_RAY_INTERSECTION_BATCH_SIZE", 16384)) - 1
 
 #: Where ignored bodies are parked during a cast (far below and away from any scene).
 _PARKING = np.array([1.0e4, 1.0e4, -1.0e4])
@@ -118,6 +119,13 @@ class PyBulletCamera:
         eye = ", ".join(f"{v:.3g}" for v in self.eye)
         return f"PyBulletCamera(eye=({eye}), client={self.client}, max_range={self.max_range})"
 
+    def bodies(self) -> list[int]:
+        """Unique ids of every body in this camera's physics client."""
+        return [
+            p.getBodyUniqueId(i, physicsClientId=self.client)
+            for i in range(p.getNumBodies(physicsClientId=self.client))
+        ]
+
     def visible(self, points: np.ndarray, ignore: Collection[int] = ()) -> np.ndarray:
         """See :class:`Visibility`.  Ignored bodies are parked away during the cast."""
         pts = np.asarray(points, dtype=float)
@@ -156,6 +164,8 @@ class PyBulletCamera:
                     numThreads=self.num_threads,
                     physicsClientId=self.client,
                 )
+                if len(out) != len(chunk):
+                    raise RuntimeError(f"rayTestBatch returned {len(out)} results for {len(chunk)}")
                 hits[start : start + len(chunk)] = [r[0] >= 0 for r in out]
                 self.rays_cast += len(chunk)
         result[cast] = ~hits
