@@ -1,0 +1,87 @@
+"""The one exception family of ssr-compile.
+
+Every error a user can cause is an :class:`SSRError`.  Errors that point into a file carry the
+file name, line and column and render the offending line with a caret, so the CLI can print
+them as they are and exit with code 2 (DESIGN §7).
+"""
+
+from __future__ import annotations
+
+
+class SSRError(Exception):
+    """Base class: an error caused by the user's input, reported without a traceback."""
+
+    exit_code = 2
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        file: str | None = None,
+        line: int | None = None,
+        col: int | None = None,
+        source: str | None = None,
+    ):
+        super().__init__(message)
+        self.message = message
+        self.file = file
+        self.line = line
+        self.col = col
+        self.source = source
+
+    @property
+    def location(self) -> str:
+        parts = [self.file or "<input>"]
+        if self.line is not None:
+            parts.append(str(self.line))
+            if self.col is not None:
+                parts.append(str(self.col))
+        return ":".join(parts)
+
+    def __str__(self) -> str:
+        text = f"{self.location}: {self.label}: {self.message}"
+        caret = caret_lines(self.source, self.line, self.col)
+        return f"{text}\n{caret}" if caret else text
+
+    label = "error"
+
+
+class PDDLSyntaxError(SSRError):
+    """The text is not in the dialect's grammar."""
+
+    label = "syntax error"
+
+
+class CheckError(SSRError):
+    """The text parses but is not a valid domain, problem or stream file."""
+
+
+class UnsupportedError(SSRError):
+    """A construct that a pass or a planner backend does not support."""
+
+    label = "unsupported"
+
+
+class StreamError(SSRError):
+    """A streams module is missing, fails to import, or lacks a declared stream."""
+
+
+def caret_lines(source: str | None, line: int | None, col: int | None) -> str:
+    """The source line ``line`` and a caret under column ``col`` (both 1-based)."""
+    if source is None or line is None:
+        return ""
+    lines = source.splitlines()
+    if not 1 <= line <= len(lines):
+        return ""
+    text = _printable(lines[line - 1].expandtabs(1))
+    if len(text) > 160:
+        start = max(0, (col or 1) - 80)
+        text = ("..." if start else "") + text[start : start + 160]
+        col = (col or 1) - start + (3 if start else 0)
+    pointer = " " * (max(col or 1, 1) - 1) + "^"
+    return f"    {text}\n    {pointer}"
+
+
+def _printable(text: str) -> str:
+    """Replace control characters so that a caret line stays aligned and readable."""
+    return "".join(ch if ch.isprintable() else "?" for ch in text)
