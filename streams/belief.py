@@ -409,15 +409,15 @@ class ObservationModel:
 def _reinvigorate(
     belief: PoseBelief,
     z: np.ndarray,
-    post_log_w: np.ndarray,
     model: ObservationModel,
     rng: np.random.Generator,
     frac: float,
     keep_mass: float,
 ) -> PoseBelief:
     """Replace ``round(frac N)`` particles by draws from ``N(z, Sigma)`` on the surface that
-    contains the detection; the others are resampled from the posterior (or, if it is all zero,
-    the prior) and together keep probability ``keep_mass``."""
+    contains the detection; the others are resampled from the *prior* (the deprived posterior
+    has collapsed onto the least-bad particles, useless as a hedge) and together keep
+    probability ``keep_mass``."""
     n = len(belief)
     n_new = min(n, max(1, round(frac * n)))
     xy = z[None, :2]
@@ -447,12 +447,7 @@ def _reinvigorate(
         [new_xy, np.full(n_new, surf.z + belief.z_offset), z[3] + rng.normal(size=n_new) * std[3]]
     )
     n_old = n - n_new
-    base = post_log_w if math.isfinite(logsumexp(post_log_w)) else np.log(belief.weights)
-    old = (
-        systematic_resample(np.exp(base - logsumexp(base)), rng, n_old)
-        if n_old
-        else np.zeros(0, int)
-    )
+    old = systematic_resample(belief.weights, rng, n_old) if n_old else np.zeros(0, int)
     keep = keep_mass if n_old else 0.0
     weights = np.concatenate(
         [np.full(n_old, keep / max(n_old, 1)), np.full(n_new, (1 - keep) / n_new)]
@@ -491,7 +486,8 @@ def update(
       near ``z``: a fraction ``reinvig_frac`` of the particles is replaced by draws from
       ``N(z, Sigma)`` restricted to the surface containing ``z`` (the nearest surface if none
       does), carrying mass ``1 - reinvig_keep_mass``; the rest keep the old hypotheses with the
-      small mass ``reinvig_keep_mass``, so a wrong detection can still be recovered from.
+      small mass ``reinvig_keep_mass`` (resampled from the prior), so that a wrong detection
+      can still be recovered from.
     * Resampling (systematic) when ESS < ``resample_frac * N``.
 
     ``rng`` drives reinvigoration and resampling; when ``None`` it is seeded from the belief's
@@ -525,7 +521,7 @@ def update(
                 d2.size == 0 or float(d2.min()) > reinvig_mahalanobis**2
             )
             if deprived:
-                return _reinvigorate(belief, z, post, model, rng, reinvig_frac, reinvig_keep_mass)
+                return _reinvigorate(belief, z, model, rng, reinvig_frac, reinvig_keep_mass)
             out = belief.with_log_weights(post)
     if out.ess() < resample_frac * len(out):
         out = out.resample(rng)
