@@ -157,10 +157,10 @@ class PyBulletCamera:
         with bodies_at(self.client, parking):
             for start in range(0, len(cast), MAX_RAY_BATCH):
                 chunk = targets[start : start + MAX_RAY_BATCH]
-                froms = np.broadcast_to(self.eye, chunk.shape)
-                out = p.rayTestBatch(
-                    froms.tolist(),
-                    chunk.tolist(),
+                froms = np.ascontiguousarray(np.broadcast_to(self.eye, chunk.shape))
+                out = p.rayTestBatch(  # numpy arrays go in directly: no list conversion
+                    froms,
+                    np.ascontiguousarray(chunk),
                     numThreads=self.num_threads,
                     physicsClientId=self.client,
                 )
