@@ -1,0 +1,263 @@
+"""The Franka Panda of ``pybullet_data`` on a planar mobile base (paper §VIII).
+
+The base is three joints (prismatic x, prismatic y, revolute yaw) prepended at run time to the
+panda URDF: we write a URDF into a temp dir with the mesh paths made absolute, whose root is a
+massless ``world`` link, then a box-shaped base body carrying ``panda_link0`` on a pedestal.
+Inverse kinematics uses pybullet's ``calculateInverseKinematics`` with null-space restarts in a
+private DIRECT client holding the bare arm (so that IK never moves the base joints), and every
+solution is verified by forward kinematics.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+import pybullet_data
+
+from sim.geometry import Pose, angle_between, invert, multiply, pose, pose2d
+
+PANDA_URDF = os.path.join(pybullet_data.getDataPath(), "franka_panda", "panda.urdf")
+
+#: Base body: a box of these half extents; the arm is mounted on top of it, ahead of its centre.
+BASE_HALF_EXTENTS = (0.25, 0.2, 0.17)
+BASE_CLEARANCE = 0.01  # the box floats 1 cm above the floor (wheels)
+MOUNT_OFFSET = (0.1, 0.0, BASE_CLEARANCE + 2 * BASE_HALF_EXTENTS[2])  # panda_link0 in base frame
+BASE_LIMITS = ((-3.0, 3.0), (-3.0, 3.0), (-np.pi, np.pi))
+
+ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
+FINGER_JOINTS = ("panda_finger_joint1", "panda_finger_joint2")
+BASE_JOINTS = ("base_x", "base_y", "base_theta")
+TOOL_LINK = "panda_grasptarget"
+HAND_LINKS = ("panda_link8", "panda_hand", "panda_leftfinger", "panda_rightfinger", TOOL_LINK)
+FINGER_OPEN = 0.04
+
+#: A comfortable arm configuration (arm folded up, hand forward and down).
+ARM_REST = (0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.785)
+#: Arm tucked in above the base: used while driving and to clear the camera's view.
+ARM_TUCK = (0.0, -1.2, 0.0, -2.9, 0.0, 1.8, 0.785)
+
+_BASE_XML = """
+  <link name="world">
+    <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>
+  </link>
+  <link name="base_x_link">
+    <inertial><mass value="0.01"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>
+  </link>
+  <link name="base_y_link">
+    <inertial><mass value="0.01"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>
+  </link>
+  <link name="base_link">
+    <inertial><mass value="20"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>
+    <visual><origin xyz="0 0 {bz}"/><geometry><box size="{bx} {by} {bh}"/></geometry>
+      <material name="base_grey"><color rgba="0.35 0.35 0.4 1"/></material></visual>
+    <collision><origin xyz="0 0 {bz}"/><geometry><box size="{bx} {by} {bh}"/></geometry></collision>
+  </link>
+  <joint name="base_x" type="prismatic">
+    <parent link="world"/><child link="base_x_link"/><axis xyz="1 0 0"/>
+    <limit lower="{xl}" upper="{xu}" effort="1000" velocity="1"/>
+  </joint>
+  <joint name="base_y" type="prismatic">
+    <parent link="base_x_link"/><child link="base_y_link"/><axis xyz="0 1 0"/>
+    <limit lower="{yl}" upper="{yu}" effort="1000" velocity="1"/>
+  </joint>
+  <joint name="base_theta" type="revolute">
+    <parent link="base_y_link"/><child link="base_link"/><axis xyz="0 0 1"/>
+    <limit lower="{tl}" upper="{tu}" effort="1000" velocity="1"/>
+  </joint>
+  <joint name="base_to_panda" type="fixed">
+    <parent link="base_link"/><child link="panda_link0"/><origin xyz="{mx} {my} {mz}"/>
+  </joint>
+"""
+
+
+def write_mobile_panda_urdf(directory: str) -> str:
+    """Write the mobile-base panda URDF into ``directory`` and return its path."""
+    with open(PANDA_URDF) as f:
+        text = f.read()
+    mesh_dir = os.path.join(os.path.dirname(PANDA_URDF), "meshes")
+    text = text.replace("package://meshes", mesh_dir)
+    body = re.search(r"<robot[^>]*>(.*)</robot>", text, re.S)
+    if body is None:  # pragma: no cover - the shipped file is well formed
+        raise RuntimeError(f"unexpected panda URDF format: {PANDA_URDF}")
+    (xl, xu), (yl, yu), (tl, tu) = BASE_LIMITS
+    hx, hy, hz = BASE_HALF_EXTENTS
+    base = _BASE_XML.format(
+        bx=2 * hx, by=2 * hy, bh=2 * hz, bz=BASE_CLEARANCE + hz,
+        xl=xl, xu=xu, yl=yl, yu=yu, tl=tl, tu=tu,
+        mx=MOUNT_OFFSET[0], my=MOUNT_OFFSET[1], mz=MOUNT_OFFSET[2],
+    )  # fmt: skip
+    path = os.path.join(directory, "mobile_panda.urdf")
+    with open(path, "w") as f:
+        f.write(
+            f'<?xml version="1.0"?>\n<robot name="mobile_panda">{base}{body.group(1)}</robot>\n'
+        )
+    return path
+
+
+def _joint_and_link_maps(body: int, client: int) -> tuple[dict[str, int], dict[str, int]]:
+    joints, links = {}, {}
+    for j in range(p.getNumJoints(body, physicsClientId=client)):
+        info = p.getJointInfo(body, j, physicsClientId=client)
+        joints[info[1].decode()] = j
+        links[info[12].decode()] = j
+    return joints, links
+
+
+def base_to_link0(base_conf: Sequence[float]) -> Pose:
+    """World pose of ``panda_link0`` for a base configuration ``(x, y, yaw)``."""
+    x, y, yaw = base_conf
+    return multiply(pose2d(x, y, 0.0, yaw), pose(MOUNT_OFFSET))
+
+
+@dataclass
+class IKResult:
+    conf: tuple[float, ...]
+    pos_error: float
+    ori_error: float
+
+
+class Robot:
+    """The mobile panda loaded into ``client``, plus a private IK client with the bare arm."""
+
+    def __init__(self, client: int, tmpdir: str | None = None) -> None:
+        self.client = client
+        self._tmp = None
+        if tmpdir is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="ssr_sim_")
+            tmpdir = self._tmp.name
+        urdf = write_mobile_panda_urdf(tmpdir)
+        self.body = p.loadURDF(urdf, useFixedBase=True, physicsClientId=client)
+        self.joints, self.links = _joint_and_link_maps(self.body, client)
+        self.base_joints = [self.joints[n] for n in BASE_JOINTS]
+        self.arm_joints = [self.joints[n] for n in ARM_JOINTS]
+        self.finger_joints = [self.joints[n] for n in FINGER_JOINTS]
+        self.tool_link = self.links[TOOL_LINK]
+        self.base_link = self.links["base_link"]
+        self.hand_links = frozenset(self.links[n] for n in HAND_LINKS)
+        lims = [p.getJointInfo(self.body, j, physicsClientId=client)[8:10] for j in self.arm_joints]
+        self.arm_lower = np.array([lo for lo, _ in lims])
+        self.arm_upper = np.array([hi for _, hi in lims])
+        # Private kinematics client: the bare arm with panda_link0 at the origin.
+        self.ik_client = p.connect(p.DIRECT)
+        self.ik_body = p.loadURDF(PANDA_URDF, useFixedBase=True, physicsClientId=self.ik_client)
+        ik_joints, ik_links = _joint_and_link_maps(self.ik_body, self.ik_client)
+        self.ik_arm = [ik_joints[n] for n in ARM_JOINTS]
+        self.ik_fingers = [ik_joints[n] for n in FINGER_JOINTS]
+        self.ik_tool = ik_links[TOOL_LINK]
+        self.set_fingers(FINGER_OPEN)
+
+    def close(self) -> None:
+        if self.ik_client is not None and p.isConnected(self.ik_client):
+            p.disconnect(self.ik_client)
+        self.ik_client = None
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+
+    # -- state -------------------------------------------------------------------------------
+    def set_base(self, conf: Sequence[float]) -> None:
+        for j, v in zip(self.base_joints, conf, strict=True):
+            p.resetJointState(self.body, j, float(v), physicsClientId=self.client)
+
+    def set_arm(self, conf: Sequence[float]) -> None:
+        for j, v in zip(self.arm_joints, conf, strict=True):
+            p.resetJointState(self.body, j, float(v), physicsClientId=self.client)
+
+    def set_fingers(self, width: float) -> None:
+        for j in self.finger_joints:
+            p.resetJointState(self.body, j, float(width), physicsClientId=self.client)
+
+    def get_base(self) -> tuple[float, float, float]:
+        return tuple(
+            p.getJointState(self.body, j, physicsClientId=self.client)[0] for j in self.base_joints
+        )  # type: ignore[return-value]
+
+    def get_arm(self) -> tuple[float, ...]:
+        return tuple(
+            p.getJointState(self.body, j, physicsClientId=self.client)[0] for j in self.arm_joints
+        )
+
+    def tool_pose(self) -> Pose:
+        st = p.getLinkState(
+            self.body, self.tool_link, computeForwardKinematics=True, physicsClientId=self.client
+        )
+        return pose(st[4], st[5])
+
+    def within_limits(self, conf: Sequence[float], tol: float = 1e-6) -> bool:
+        c = np.asarray(conf)
+        return bool(np.all(c >= self.arm_lower - tol) and np.all(c <= self.arm_upper + tol))
+
+    # -- kinematics (private client) ---------------------------------------------------------
+    def _ik_fk(self, conf: Sequence[float]) -> Pose:
+        for j, v in zip(self.ik_arm, conf, strict=True):
+            p.resetJointState(self.ik_body, j, float(v), physicsClientId=self.ik_client)
+        st = p.getLinkState(
+            self.ik_body,
+            self.ik_tool,
+            computeForwardKinematics=True,
+            physicsClientId=self.ik_client,
+        )
+        return pose(st[4], st[5])
+
+    def forward_kinematics(self, base_conf: Sequence[float], arm_conf: Sequence[float]) -> Pose:
+        """World pose of the tool frame, computed without touching the world's state."""
+        return multiply(base_to_link0(base_conf), self._ik_fk(arm_conf))
+
+    def sample_arm(self, rng: np.random.Generator) -> tuple[float, ...]:
+        return tuple(float(v) for v in rng.uniform(self.arm_lower, self.arm_upper))
+
+    def inverse_kinematics(
+        self,
+        base_conf: Sequence[float],
+        tool_world: Pose,
+        rng: np.random.Generator,
+        *,
+        seed_conf: Sequence[float] | None = None,
+        restarts: int = 12,
+        pos_tol: float = 2e-3,
+        ori_tol: float = 2e-2,
+    ) -> IKResult | None:
+        """Arm configuration putting the tool at ``tool_world`` for a fixed base, or None.
+
+        Null-space IK (joint limits and a rest pose) from ``seed_conf`` then random restarts;
+        each candidate is iterated and accepted only when forward kinematics agrees within
+        ``pos_tol`` (m) and ``ori_tol`` (rad) and it is within the joint limits.
+        """
+        target = multiply(invert(base_to_link0(base_conf)), tool_world)
+        lower = list(self.arm_lower) + [0.0, 0.0]
+        upper = list(self.arm_upper) + [FINGER_OPEN, FINGER_OPEN]
+        ranges = [hi - lo for lo, hi in zip(lower, upper, strict=True)]
+        seeds = [tuple(seed_conf)] if seed_conf is not None else [ARM_REST]
+        for k in range(restarts):
+            seed = seeds[k] if k < len(seeds) else self.sample_arm(rng)
+            conf = np.asarray(seed, dtype=float)
+            for _ in range(4):
+                self._ik_fk(conf)
+                sol = p.calculateInverseKinematics(
+                    self.ik_body,
+                    self.ik_tool,
+                    target[0],
+                    target[1],
+                    lowerLimits=lower,
+                    upperLimits=upper,
+                    jointRanges=ranges,
+                    restPoses=list(seed) + [FINGER_OPEN, FINGER_OPEN],
+                    maxNumIterations=200,
+                    residualThreshold=1e-6,
+                    physicsClientId=self.ik_client,
+                )
+                conf = np.asarray(sol[:7])
+                reached = self._ik_fk(conf)
+                pos_err = float(np.linalg.norm(np.subtract(reached[0], target[0])))
+                ori_err = angle_between(reached[1], target[1])
+                if pos_err < pos_tol and ori_err < ori_tol:
+                    break
+            if pos_err < pos_tol and ori_err < ori_tol and self.within_limits(conf):
+                return IKResult(tuple(float(v) for v in conf), pos_err, ori_err)
+        return None

@@ -1,0 +1,419 @@
+"""Geometric streams of the kitchen domain (paper §IV, DESIGN §6), as plain callables.
+
+Generator streams return iterables of output tuples, function streams return one tuple or
+None, tests return bool.  All of them act on a :class:`sim.world.World` (checking hypothetical
+states inside ``world.saved()``, so the world is unchanged afterwards) and draw randomness from
+one ``numpy.random.Generator``.  :func:`stream_table` names them for a streams module.
+
+Values: a :class:`Grasp` is the object's pose in the tool frame; an :class:`ObjPose` is a pose
+relative to the frame of its support (drawer contents move with the drawer); configurations are
+tuples (base: x, y, yaw; arm: 7 joints); trajectories are tuples of configurations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.actions import DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
+from sim.geometry import (
+    Pose,
+    invert,
+    matrix_to_quat,
+    multiply,
+    pose,
+    quat_from_axis_angle,
+    quat_from_yaw,
+    quat_mul,
+)
+from sim.motion import refine, rrt_connect
+from sim.robot import ARM_TUCK, BASE_LIMITS, MOUNT_OFFSET
+from sim.world import DRAWER_TRAVEL, World
+
+Conf = tuple[float, ...]
+MAX_FINGER_SPAN = 0.07  # widest object the gripper closes on (opening 0.08)
+APPROACH = 0.10  # pre-grasp distance along the approach axis
+ARM_RESOLUTION = 0.05  # rad, edge collision-checking resolution of arm motions
+BASE_RESOLUTION = (0.02, 0.02, 0.03)
+MAX_JOINT_JUMP = 0.25  # rad between consecutive IK waypoints of a Cartesian path
+#: Tool orientation facing +x with the fingers closing vertically (handles, the button).
+FACING_X = matrix_to_quat(np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], float))
+
+
+@dataclass(frozen=True)
+class Grasp:
+    obj: str
+    kind: str  # "top" or "side"
+    pose: Pose  # object pose in the tool frame
+
+
+@dataclass(frozen=True)
+class ObjPose:
+    obj: str
+    surface: str
+    rel: Pose  # in the surface's frame
+
+
+def _grasp_from_tool(tool_in_obj: Pose) -> Pose:
+    return invert(tool_in_obj)
+
+
+class KitchenStreams:
+    """Stream implementations bound to one world and one random generator."""
+
+    def __init__(
+        self,
+        world: World,
+        rng: np.random.Generator,
+        *,
+        ik_restarts: int = 6,
+        max_attempts: int = 30,
+        rrt_iterations: int = 300,
+    ) -> None:
+        self.world = world
+        self.rng = rng
+        self.ik_restarts = ik_restarts
+        self.max_attempts = max_attempts
+        self.rrt_iterations = rrt_iterations
+        self._kin_cache: dict = {}
+
+    # -- poses -----------------------------------------------------------------------------
+    def world_pose(self, p: ObjPose) -> Pose:
+        return multiply(self.world.surface_frame(p.surface), p.rel)
+
+    def current_pose(self, obj: str) -> ObjPose:
+        sup = self.world.support[obj]
+        if sup is None:
+            raise ValueError(f"{obj} is not resting on a surface")
+        return ObjPose(obj, sup[0], sup[1])
+
+    # -- grasps ----------------------------------------------------------------------------
+    def grasps(self, obj: str) -> list[Grasp]:
+        """Top grasps (4 yaws, fingers across a side no wider than the gripper) and side grasps
+        (from each vertical face, fingers closing horizontally)."""
+        hx, hy, hz = self.world.half_extents[obj]
+        half = {0: hx, 1: hy}
+        out = []
+        depth = min(0.025, hz)
+        down = quat_from_axis_angle((1, 0, 0), np.pi)  # tool z = -object z, tool y = -object y
+        for k in range(4):
+            yaw = k * np.pi / 2
+            across = half[1] if k % 2 == 0 else half[0]  # extent along the finger axis
+            if 2 * across > MAX_FINGER_SPAN:
+                continue
+            tool = pose((0.0, 0.0, hz - depth), quat_mul(quat_from_yaw(yaw), down))
+            out.append(Grasp(obj, "top", _grasp_from_tool(tool)))
+        ez = np.array([0.0, 0.0, 1.0])
+        for axis in (0, 1):
+            other = 1 - axis
+            if 2 * half[other] > MAX_FINGER_SPAN:
+                continue
+            for sign in (1.0, -1.0):
+                z_t = np.zeros(3)
+                z_t[axis] = -sign  # approach towards the face at +sign*axis
+                y_t = np.zeros(3)
+                y_t[other] = 1.0
+                x_t = np.cross(y_t, z_t)
+                if np.dot(x_t, ez) < 0:  # keep the hand's x axis up: mirror the finger axis
+                    y_t, x_t = -y_t, -x_t
+                rot = np.column_stack([x_t, y_t, z_t])
+                pos = -z_t * (half[axis] - 0.02)
+                tool = pose(pos, matrix_to_quat(rot))
+                out.append(Grasp(obj, "side", _grasp_from_tool(tool)))
+        return out
+
+    def sample_grasps(self, obj: str) -> Iterator[tuple[Grasp]]:
+        """Generator stream ``sample-grasp``: the grasps of ``obj`` in random order."""
+        gs = self.grasps(obj)
+        for i in self.rng.permutation(len(gs)):
+            yield (gs[i],)
+
+    # -- placements ------------------------------------------------------------------------
+    def placement_valid(self, p: ObjPose, ignore: tuple[str, ...] = ()) -> bool:
+        """Stable (upright, resting on the surface), inside the support, collision-free with
+        the world (robot excluded) in the current state."""
+        w = self.world
+        s = w.surfaces[p.surface]
+        hz = w.half_extents[p.obj][2]
+        upright = abs(p.rel[1][0]) < 1e-6 and abs(p.rel[1][1]) < 1e-6
+        if not upright or abs(p.rel[0][2] - (s.z + hz) - 1e-3) > 1e-6:
+            return False
+        if not w.inside_surface(p.obj, p.surface, p.rel, margin=0.005):
+            return False
+        with w.saved():
+            if w.held is not None and w.held.obj == p.obj:
+                w.held = None
+            w.place_object(p.obj, p.surface, p.rel)
+            body = w.objects[p.obj]
+            skip = set(ignore) | {p.obj}
+            return not any(w._pair(body, b) for b in w.obstacles(skip))
+
+    def sample_placements(self, obj: str, surface: str) -> Iterator[tuple[ObjPose]]:
+        """Generator stream ``sample-placement``: stable, inside, collision-free poses."""
+        w = self.world
+        s = w.surfaces[surface]
+        for _ in range(self.max_attempts):
+            x = self.rng.uniform(s.lo[0], s.hi[0])
+            y = self.rng.uniform(s.lo[1], s.hi[1])
+            yaw = self.rng.uniform(-np.pi, np.pi)
+            p = ObjPose(obj, surface, w.rest_pose(obj, surface, x, y, yaw))
+            if self.placement_valid(p):
+                yield (p,)
+
+    # -- kinematics ------------------------------------------------------------------------
+    def _set_hypothesis(self, obj: str, p: ObjPose) -> bool:
+        """Inside ``saved()``: put ``obj`` at ``p`` unless it is held.  Returns holding?"""
+        w = self.world
+        if w.held is not None and w.held.obj == obj:
+            return True
+        w.place_object(obj, p.surface, p.rel)
+        return False
+
+    def cartesian_path(
+        self, base: Conf, poses: list[Pose], seed: Conf | None = None
+    ) -> list[Conf] | None:
+        """IK along a list of tool poses, each seeded by the previous solution."""
+        w = self.world
+        path: list[Conf] = []
+        for i, tp in enumerate(poses):
+            sd = seed if i == 0 else path[-1]
+            restarts = self.ik_restarts if i == 0 else 1
+            res = w.robot.inverse_kinematics(base, tp, self.rng, seed_conf=sd, restarts=restarts)
+            if res is None:
+                return None
+            if path and np.max(np.abs(np.subtract(res.conf, path[-1]))) > MAX_JOINT_JUMP:
+                return None
+            path.append(res.conf)
+        return path
+
+    def approach_path(
+        self, base: Conf, tool: Pose, back: float = APPROACH, steps: int = 5, ignore_hand=()
+    ) -> list[Conf] | None:
+        """Arm path from the pre-pose (``back`` along the tool's -z) to ``tool`` (in the world
+        state as it is), collision-checked; the hand may touch ``ignore_hand`` at the end."""
+        w = self.world
+        poses = [multiply(tool, pose((0, 0, -back * (1 - k / steps)))) for k in range(steps + 1)]
+        # Solve the goal first (many restarts), then walk back to the pre-pose from it.
+        rev = self.cartesian_path(base, poses[::-1])
+        if rev is None:
+            return None
+        path = rev[::-1]
+        w.robot.set_base(base)
+        for i, q in enumerate(path):
+            w.set_arm(q)
+            if w.robot_collision(ignore_hand=ignore_hand if i > 0 else ()):
+                return None
+        return path
+
+    def inv_kin(
+        self, obj: str, p: ObjPose, g: Grasp, base: Conf
+    ) -> tuple[Conf, tuple[Conf, ...]] | None:
+        """Function stream ``inv-kin``: (pre-grasp arm conf, approach path) for grasping
+        ``obj`` at ``p`` with ``g`` from ``base`` (or placing it there when it is held)."""
+        key = (obj, p, g, tuple(base))
+        if key in self._kin_cache:
+            return self._kin_cache[key]
+        w = self.world
+        with w.saved():
+            holding = self._set_hypothesis(obj, p)
+            w.set_base(base)
+            tool = multiply(self.world_pose(p), invert(g.pose))
+            if holding:
+                w.held.grasp = g.pose
+            path = self.approach_path(base, tool, ignore_hand=() if holding else (obj,))
+        out = None if path is None else (path[0], tuple(path))
+        self._kin_cache[key] = out
+        return out
+
+    def _sample_base_near(self, target_xy, r_range=(0.3, 0.75)) -> Conf | None:
+        psi = self.rng.uniform(-np.pi / 3, np.pi / 3)
+        r = self.rng.uniform(*r_range)
+        yaw = psi + self.rng.uniform(-0.3, 0.3)
+        link0 = np.asarray(target_xy[:2]) - r * np.array([np.cos(psi), np.sin(psi)])
+        base_xy = link0 - MOUNT_OFFSET[0] * np.array([np.cos(yaw), np.sin(yaw)])
+        conf = (float(base_xy[0]), float(base_xy[1]), float(yaw))
+        lo = [lim[0] for lim in BASE_LIMITS]
+        hi = [lim[1] for lim in BASE_LIMITS]
+        if not all(a <= v <= b for a, v, b in zip(lo, conf, hi, strict=True)):
+            return None
+        return conf
+
+    def base_free(self, base: Conf, arm: Conf | None = None) -> bool:
+        w = self.world
+        with w.saved():
+            w.set_base(base)
+            w.set_arm(ARM_TUCK if arm is None else arm)
+            return not w.robot_collision()
+
+    def inv_reach(self, obj: str, p: ObjPose, g: Grasp) -> Iterator[tuple[Conf]]:
+        """Generator stream ``inv-reach``: base confs from which ``inv-kin`` succeeds."""
+        target = multiply(self.world_pose(p), invert(g.pose))[0]
+        for _ in range(self.max_attempts):
+            base = self._sample_base_near(target)
+            if base is None or not self.base_free(base):
+                continue
+            if self.inv_kin(obj, p, g, base) is not None:
+                yield (base,)
+
+    # -- motions ---------------------------------------------------------------------------
+    def _arm_collision_fn(self, base: Conf) -> Callable[[np.ndarray], bool]:
+        w = self.world
+
+        def collision(q: np.ndarray) -> bool:
+            w.set_arm(q)
+            return w.robot_collision()
+
+        w.robot.set_base(base)
+        return collision
+
+    def plan_arm_motion(self, base: Conf, q1: Conf, q2: Conf) -> tuple[tuple[Conf, ...]] | None:
+        """Function stream ``motion`` (arm): an RRT-Connect path ``q1 -> q2`` at ``base``,
+        collision-free against the world, open drawers and the held object."""
+        w = self.world
+        r = w.robot
+        with w.saved():
+            w.set_base(base)
+            path = rrt_connect(
+                q1, q2, lambda: np.asarray(r.sample_arm(self.rng)),
+                self._arm_collision_fn(base), self.rng,
+                resolution=ARM_RESOLUTION, max_iterations=self.rrt_iterations,
+            )  # fmt: skip
+        return None if path is None else (tuple(refine(path, ARM_RESOLUTION)),)
+
+    def plan_base_motion(self, b1: Conf, b2: Conf) -> tuple[tuple[Conf, ...]] | None:
+        """Function stream ``motion`` (base): an RRT-Connect path in (x, y, yaw) with the arm
+        (and held object) as they are, collision-checked at 2 cm / 0.03 rad."""
+        w = self.world
+        lo = np.array([-1.5, -1.8, -np.pi])
+        hi = np.array([0.8, 1.8, np.pi])
+
+        def collision(q: np.ndarray) -> bool:
+            w.set_base(q)
+            return w.robot_collision()
+
+        with w.saved():
+            path = rrt_connect(
+                b1, b2, lambda: self.rng.uniform(lo, hi), collision, self.rng,
+                resolution=BASE_RESOLUTION, step=0.5, weights=(1.0, 1.0, 0.3),
+                max_iterations=self.rrt_iterations,
+            )  # fmt: skip
+        return None if path is None else (tuple(refine(path, BASE_RESOLUTION)),)
+
+    # -- drawers ---------------------------------------------------------------------------
+    def handle_tool(self, drawer: str, q: float) -> Pose:
+        x = self.world.handle_pose(drawer)[0] + self.world.drawer_q[drawer] - q
+        _, y, z = self.world.handle_pose(drawer)
+        return pose((x, y, z), FACING_X)
+
+    def sample_drawer_base(self, drawer: str) -> Iterator[tuple[Conf]]:
+        """Generator stream: base confs from which the handle is reachable over the whole
+        travel of ``drawer`` (checked at both ends)."""
+        for _ in range(self.max_attempts):
+            target = self.handle_tool(drawer, DRAWER_TRAVEL)[0]
+            base = self._sample_base_near(target, (0.25, 0.55))
+            if base is None or not self.base_free(base):
+                continue
+            if self.plan_drawer(drawer, 0.0, DRAWER_TRAVEL, base) is not None:
+                yield (base,)
+
+    def plan_drawer(
+        self, drawer: str, q1: float, q2: float, base: Conf, step: float = 0.02
+    ) -> DrawerMotion | None:
+        """Function stream ``pull``/``push``: approach the handle at opening ``q1``, move it to
+        ``q2`` (tool following the handle), retreat.  Collision-checked with the drawer (and
+        its contents) moving; the gripper may touch the handle's drawer only."""
+        w = self.world
+        n = max(1, int(np.ceil(abs(q2 - q1) / step)))
+        qs = [q1 + (q2 - q1) * k / n for k in range(n + 1)]
+        with w.saved():
+            w.set_drawer(drawer, q1)
+            w.set_base(base)
+            start = self.approach_path(base, self.handle_tool(drawer, q1), back=0.08)
+            if start is None:
+                return None
+            moving = self.cartesian_path(base, [self.handle_tool(drawer, q) for q in qs], start[-1])
+            if moving is None:
+                return None
+            for q_d, q_a in zip(qs, moving, strict=True):
+                w.set_drawer(drawer, q_d)
+                w.set_arm(q_a)
+                if w.robot_collision():
+                    return None
+            end = self.approach_path(base, self.handle_tool(drawer, q2), back=0.08)
+            if end is None:
+                return None
+        arm = list(start) + list(moving[1:]) + list(end[::-1][1:])
+        dq = [q1] * len(start) + qs[1:] + [q2] * (len(end) - 1)
+        return DrawerMotion(drawer, tuple(arm), tuple(dq))
+
+    # -- stove button ------------------------------------------------------------------------
+    def plan_press(self, base: Conf) -> tuple[tuple[Conf, ...]] | None:
+        """Function stream: approach path to the stove button (pre-press -> press)."""
+        w = self.world
+        with w.saved():
+            w.set_base(base)
+            path = self.approach_path(base, pose(w.button_pose()[0], FACING_X), back=0.08)
+        return None if path is None else (tuple(path),)
+
+    def sample_press_base(self) -> Iterator[tuple[Conf]]:
+        target = self.world.button_pose()[0]
+        for _ in range(self.max_attempts):
+            base = self._sample_base_near(target, (0.3, 0.6))
+            if base is not None and self.base_free(base) and self.plan_press(base) is not None:
+                yield (base,)
+
+    # -- tests -----------------------------------------------------------------------------
+    def test_cfree_pose_pose(self, o1: str, p1: ObjPose, o2: str, p2: ObjPose) -> bool:
+        """Test stream ``cfree-pose-pose``: the two objects at these poses do not collide."""
+        w = self.world
+        with w.saved():
+            w.held = None
+            w.place_object(o1, p1.surface, p1.rel)
+            w.place_object(o2, p2.surface, p2.rel)
+            return not w._pair(w.objects[o1], w.objects[o2])
+
+    def test_cfree_traj_pose(self, base: Conf, traj, o2: str, p2: ObjPose) -> bool:
+        """Test stream ``cfree-traj-pose``: the arm trajectory at ``base`` avoids ``o2`` at
+        ``p2``."""
+        w = self.world
+        with w.saved():
+            w.place_object(o2, p2.surface, p2.rel)
+            w.set_base(base)
+            for q in traj:
+                w.set_arm(q)
+                if w._pair(w.robot.body, w.objects[o2]):
+                    return False
+        return True
+
+
+def stream_table(ks: KitchenStreams) -> dict[str, Callable]:
+    """Stream names (paper §IV, DESIGN §6) -> callables, for a streams module to bind."""
+    return {
+        "sample-grasp": ks.sample_grasps,
+        "sample-placement": ks.sample_placements,
+        "inv-reach": ks.inv_reach,
+        "inv-kin": ks.inv_kin,
+        "plan-arm-motion": ks.plan_arm_motion,
+        "plan-base-motion": ks.plan_base_motion,
+        "sample-drawer-base": ks.sample_drawer_base,
+        "plan-drawer": ks.plan_drawer,
+        "sample-press-base": ks.sample_press_base,
+        "plan-press": ks.plan_press,
+        "test-cfree-pose-pose": ks.test_cfree_pose_pose,
+        "test-cfree-traj-pose": ks.test_cfree_traj_pose,
+    }
+
+
+__all__ = [
+    "Grasp",
+    "KitchenStreams",
+    "ObjPose",
+    "stream_table",
+    "MoveArm",
+    "MoveBase",
+    "Pick",
+    "Place",
+    "Press",
+]
