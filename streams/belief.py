@@ -337,7 +337,7 @@ class PoseBelief:
         )
 
 
-def _seed_from(*parts: object) -> np.random.Generator:
+def derived_rng(*parts: object) -> np.random.Generator:
     """A generator seeded from a digest of the inputs, so that functions of values stay
     deterministic (the same belief and observation always give the same posterior)."""
     h = hashlib.sha1()
@@ -471,6 +471,10 @@ def update(
 ) -> PoseBelief:
     """Bayesian filter step for one object (paper §V-B detection model), in log space.
 
+    ``detection`` is a detected pose ``(x, y, z, yaw)``, an ``Observation`` (its ``z`` is used)
+    or ``None`` for a miss; ``visible_mask`` (N,) says which particles the camera could see
+    (see :func:`streams.belief_obs.visibility_mask`).
+
     * Detection ``z``: ``w_i <- w_i (1 - p_fn) N(z; x_i, Sigma)`` for visible particles and
       ``w_i <- 0`` for occluded ones (no false positives: an occluded object is never detected).
     * Miss (``detection is None``): ``w_i <- w_i p_fn`` for visible particles, unchanged for
@@ -498,11 +502,13 @@ def update(
     mask = np.asarray(visible_mask, dtype=bool).reshape(-1)
     if len(mask) != len(belief):
         raise ValueError(f"visible_mask has {len(mask)} entries for {len(belief)} particles")
+    if detection is not None and hasattr(detection, "z"):  # an Observation: its detection z
+        detection = detection.z
     z = None if detection is None else np.asarray(detection, dtype=float).reshape(4)
     if z is not None and np.any(np.isnan(z)):
         raise ValueError("detection contains NaN")
     if rng is None:
-        rng = _seed_from(belief.digest, z, mask, model)
+        rng = derived_rng(belief.digest, z, mask, model)
     with np.errstate(divide="ignore"):
         log_w = np.log(belief.weights)
         if z is None:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ssr_compile.compile.costs import self_loop_cost
-from streams.belief import ObservationModel, PoseBelief, _seed_from, update, wrap_angle
+from streams.belief import ObservationModel, PoseBelief, derived_rng, update, wrap_angle
 from streams.visibility import Visibility, bodies_at
 
 
@@ -212,7 +212,7 @@ def visibility_lower_bound(
     elif len(pb_j) <= k:
         samples, weights = list(pb_j.poses), pb_j.weights
     else:
-        rng = rng or _seed_from(obs.digest, pb_j.digest, body_j)
+        rng = rng or derived_rng(obs.digest, pb_j.digest, body_j)
         samples, weights = list(pb_j.poses[pb_j.sample_indices(rng, k)]), np.full(k, 1.0 / k)
     client = getattr(visibility, "client", 0)
     expected = np.zeros(len(poses_i))

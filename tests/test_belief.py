@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pybullet as p
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from streams.belief import (
     ObservationModel,
@@ -206,6 +208,25 @@ def test_extreme_inputs_never_nan():
         update(tiny, None, np.ones(2, bool), MODEL)
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    weights=st.lists(st.floats(0.0, 1e300), min_size=3, max_size=3).filter(lambda w: sum(w) > 0),
+    mask=st.lists(st.booleans(), min_size=3, max_size=3),
+    z=st.one_of(st.none(), st.tuples(*[st.floats(-1e300, 1e300)] * 4)),
+    p_fn=st.floats(0.0, 1.0),
+)
+def test_update_always_normalised(weights, mask, z, p_fn):
+    pb = line_belief(weights)
+    post = update(pb, z, np.array(mask), ObservationModel(p_fn=p_fn))
+    assert np.all(np.isfinite(post.weights)) and np.all(post.weights >= 0)
+    assert post.weights.sum() == pytest.approx(1.0)
+    if z is None and (p_fn > 0 or not all(mask)):
+        # miss: w_i p_fn^{visible_i}, normalised (no resampling: ESS stays >= N/2 or is exact)
+        unnorm = pb.weights * np.where(mask, p_fn, 1.0)
+        if post.poses.tolist() == pb.poses.tolist():
+            assert post.weights == pytest.approx(unnorm / unnorm.sum(), abs=1e-9)
+
+
 def test_reinvigoration_after_impossible_detection():
     poses = np.array([[0.1 * i, 0, 0.05, 0] for i in range(10)])
     pb = PoseBelief.from_particles(
@@ -317,6 +338,7 @@ def test_update_belief_assumes_the_hypothesised_detection():
     assert obs.region.mass(post) > 0.95 > obs.region.mass(pb)
     assert post.point_estimate()[1][:2] == pytest.approx(obs.z[:2], abs=0.01)
     assert update_belief("o", pb, obs, MODEL) == post  # a deterministic function
+    assert update(pb, obs, np.ones(len(pb), bool), MODEL) == post  # same as passing obs.z
     with pytest.raises(ValueError):
         update_belief("other", pb, obs, MODEL)
 
