@@ -20,7 +20,7 @@ import numpy as np
 import pybullet as p
 import pybullet_data
 
-from sim.geometry import Pose, angle_between, invert, multiply, pose, pose2d
+from sim.geometry import Pose, angle_between, invert, multiply, pose, pose2d, quat_inv, quat_mul
 
 PANDA_URDF = os.path.join(pybullet_data.getDataPath(), "franka_panda", "panda.urdf")
 
@@ -41,6 +41,8 @@ FINGER_OPEN = 0.04
 ARM_REST = (0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.785)
 #: Arm tucked in above the base: used while driving and to clear the camera's view.
 ARM_TUCK = (0.0, -1.2, 0.0, -2.9, 0.0, 1.8, 0.785)
+#: Arm raised ahead of the base: carrying a (tall) object clear of the base and the floor.
+ARM_CARRY = (0.0, -0.3, 0.0, -1.8, 0.0, 1.5, 0.785)
 
 _BASE_XML = """
   <link name="world">
@@ -205,6 +207,35 @@ class Robot:
         )
         return pose(st[4], st[5])
 
+    def _refine(
+        self, conf: np.ndarray, target: Pose, pos_tol: float, ori_tol: float, iters: int = 60
+    ) -> tuple[np.ndarray, float, float]:
+        """Damped least-squares refinement with the Jacobian, clamped to the joint limits."""
+        zeros = [0.0] * 9
+        for _ in range(iters):
+            reached = self._ik_fk(conf)
+            e_pos = np.subtract(target[0], reached[0])
+            dq = quat_mul(target[1], quat_inv(reached[1]))
+            if dq[3] < 0:
+                dq = tuple(-v for v in dq)
+            s = np.linalg.norm(dq[:3])
+            e_rot = np.zeros(3) if s < 1e-12 else np.asarray(dq[:3]) / s * 2 * np.arctan2(s, dq[3])
+            pos_err, ori_err = float(np.linalg.norm(e_pos)), float(np.linalg.norm(e_rot))
+            if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
+                break
+            lin, ang = p.calculateJacobian(
+                self.ik_body, self.ik_tool, [0.0, 0.0, 0.0],
+                list(conf) + [FINGER_OPEN, FINGER_OPEN], zeros, zeros,
+                physicsClientId=self.ik_client,
+            )  # fmt: skip
+            jac = np.vstack([np.asarray(lin)[:, :7], np.asarray(ang)[:, :7]])
+            err = np.concatenate([e_pos, e_rot])
+            step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), err)
+            conf = np.clip(conf + step, self.arm_lower, self.arm_upper)
+        reached = self._ik_fk(conf)
+        pos_err = float(np.linalg.norm(np.subtract(reached[0], target[0])))
+        return conf, pos_err, angle_between(reached[1], target[1])
+
     def forward_kinematics(self, base_conf: Sequence[float], arm_conf: Sequence[float]) -> Pose:
         """World pose of the tool frame, computed without touching the world's state."""
         return multiply(base_to_link0(base_conf), self._ik_fk(arm_conf))
@@ -236,28 +267,22 @@ class Robot:
         seeds = [tuple(seed_conf)] if seed_conf is not None else [ARM_REST]
         for k in range(restarts):
             seed = seeds[k] if k < len(seeds) else self.sample_arm(rng)
-            conf = np.asarray(seed, dtype=float)
-            for _ in range(4):
-                self._ik_fk(conf)
-                sol = p.calculateInverseKinematics(
-                    self.ik_body,
-                    self.ik_tool,
-                    target[0],
-                    target[1],
-                    lowerLimits=lower,
-                    upperLimits=upper,
-                    jointRanges=ranges,
-                    restPoses=list(seed) + [FINGER_OPEN, FINGER_OPEN],
-                    maxNumIterations=200,
-                    residualThreshold=1e-6,
-                    physicsClientId=self.ik_client,
-                )
-                conf = np.asarray(sol[:7])
-                reached = self._ik_fk(conf)
-                pos_err = float(np.linalg.norm(np.subtract(reached[0], target[0])))
-                ori_err = angle_between(reached[1], target[1])
-                if pos_err < pos_tol and ori_err < ori_tol:
-                    break
+            self._ik_fk(seed)
+            sol = p.calculateInverseKinematics(
+                self.ik_body,
+                self.ik_tool,
+                target[0],
+                target[1],
+                lowerLimits=lower,
+                upperLimits=upper,
+                jointRanges=ranges,
+                restPoses=list(seed) + [FINGER_OPEN, FINGER_OPEN],
+                maxNumIterations=100,
+                residualThreshold=1e-5,
+                physicsClientId=self.ik_client,
+            )
+            conf = np.clip(np.asarray(sol[:7]), self.arm_lower, self.arm_upper)
+            conf, pos_err, ori_err = self._refine(conf, target, pos_tol, ori_tol)
             if pos_err < pos_tol and ori_err < ori_tol and self.within_limits(conf):
                 return IKResult(tuple(float(v) for v in conf), pos_err, ori_err)
         return None

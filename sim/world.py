@@ -204,7 +204,7 @@ class World:
         hw, wall, length = DRAWER_HALF_WIDTH, DRAWER_WALL, DRAWER_LENGTH
         for name in DRAWERS:
             floor_z, open_lo, open_hi = DRAWER_LEVELS[name]
-            front_z = (open_lo - floor_z + 0.005, open_hi - floor_z - 0.005)
+            front_z = (open_lo - floor_z - 0.01, open_hi - floor_z + 0.01)  # covers the opening
             handle_z = (front_z[0] + front_z[1]) / 2.0
             parts = [
                 _box((0.0, length), (-hw + 0.01, hw - 0.01), (-0.01, 0.0)),  # floor
@@ -355,6 +355,18 @@ class World:
         self.sync()
         self._cook()
 
+    def remove_object(self, name: str) -> None:
+        """Take ``name`` out of the scene (tasks that do not use it)."""
+        self.support[name] = None
+        p.resetBasePositionAndOrientation(
+            self.objects[name], (0, 0, -5), (0, 0, 0, 1), physicsClientId=self.client
+        )
+
+    def present(self) -> list[str]:
+        """Objects in the scene (resting somewhere or held)."""
+        held = None if self.held is None else self.held.obj
+        return [n for n in self.objects if self.support[n] is not None or n == held]
+
     def set_object(self, name: str, surface: str, x: float, y: float, yaw: float) -> None:
         self.place_object(name, surface, self.rest_pose(name, surface, x, y, yaw))
 
@@ -438,7 +450,7 @@ class World:
     def true_state(self) -> dict:
         """The latent state, for evaluation only (never an input of the policy)."""
         objects = {}
-        for name in self.objects:
+        for name in self.present():
             sup = self.support[name]
             where = "hand" if sup is None else sup[0]
             pos, quat = self.object_pose(name)

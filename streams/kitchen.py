@@ -189,14 +189,20 @@ class KitchenStreams:
         return path
 
     def approach_path(
-        self, base: Conf, tool: Pose, back: float = APPROACH, steps: int = 5, ignore_hand=()
+        self,
+        base: Conf,
+        tool: Pose,
+        back: float = APPROACH,
+        steps: int = 5,
+        ignore_hand=(),
+        seed: Conf | None = None,
     ) -> list[Conf] | None:
         """Arm path from the pre-pose (``back`` along the tool's -z) to ``tool`` (in the world
         state as it is), collision-checked; the hand may touch ``ignore_hand`` at the end."""
         w = self.world
         poses = [multiply(tool, pose((0, 0, -back * (1 - k / steps)))) for k in range(steps + 1)]
         # Solve the goal first (many restarts), then walk back to the pre-pose from it.
-        rev = self.cartesian_path(base, poses[::-1])
+        rev = self.cartesian_path(base, poses[::-1], seed)
         if rev is None:
             return None
         path = rev[::-1]
@@ -312,7 +318,7 @@ class KitchenStreams:
         travel of ``drawer`` (checked at both ends)."""
         for _ in range(self.max_attempts):
             target = self.handle_tool(drawer, DRAWER_TRAVEL)[0]
-            base = self._sample_base_near(target, (0.25, 0.55))
+            base = self._sample_base_near(target, (0.3, 0.5))
             if base is None or not self.base_free(base):
                 continue
             if self.plan_drawer(drawer, 0.0, DRAWER_TRAVEL, base) is not None:

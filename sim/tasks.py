@@ -1,0 +1,165 @@
+"""The four tasks of the paper's appendix (Inspect, Stow, Swap, Cook), generated from a seed.
+
+A :class:`Task` gives the world in its latent initial state, the prior belief as plain data
+(``object -> [(surface, weight), ...]``: uniform over those surfaces), the latent state
+(``world.true_state()`` at the start, for evaluation only) and the goal as PDDL-like tuples:
+``("On", obj, surface)``, ``("Closed", drawer)``, ``("Cooked", obj)``.
+
+* Inspect: goal block in the bottom drawer and the bottom drawer closed; prior uniform over
+  both drawers; the block is in the bottom drawer (drawers closed).
+* Stow: goal block in the top drawer and the top drawer closed; prior block uniform over the
+  counter, sugar box uniform over the top drawer; the block is on the counter, the sugar box in
+  the (open) top drawer — it is too tall for the drawer to close.
+* Swap: goal and prior as Inspect; the block is in the top drawer (drawers closed).
+* Cook: goal block cooked; prior block uniform over the counter (and so are the boxes); the
+  cracker box and the sugar box are on the counter, one of them hiding the block from the
+  camera.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sim.perception import visible_fraction
+from sim.robot import ARM_TUCK
+from sim.world import DRAWER_TRAVEL, DRAWERS, PARK_BASE, World
+from streams.belief import Surface
+
+TASKS = ("inspect", "stow", "swap", "cook")
+Goal = tuple[tuple[str, ...], ...]
+CLOSED_TOL = 0.005
+
+
+@dataclass
+class Task:
+    name: str
+    seed: int
+    world: World
+    prior: dict[str, list[tuple[str, float]]]
+    goal: Goal
+    latent: dict = field(default_factory=dict)
+
+    def goal_satisfied(self, state: dict | None = None) -> bool:
+        """The goal holds in ``state`` (default: the world's true state)."""
+        return goal_holds(self.goal, self.world.true_state() if state is None else state)
+
+    def prior_surfaces(self) -> dict[str, list[tuple[Surface, float]]]:
+        """The prior with each surface as a ``streams.belief.Surface`` in the world frame (at
+        the drawers' current openings)."""
+        return {
+            obj: [(belief_surface(self.world, s), w) for s, w in entries]
+            for obj, entries in self.prior.items()
+        }
+
+    def close(self) -> None:
+        self.world.close()
+
+
+def goal_holds(goal: Goal, state: dict) -> bool:
+    for fact in goal:
+        head, *args = fact
+        if head == "On":
+            obj, surface = args
+            if state["objects"].get(obj, {}).get("surface") != surface:
+                return False
+        elif head == "Closed":
+            if state["drawers"][args[0]] > CLOSED_TOL:
+                return False
+        elif head == "Cooked":
+            if args[0] not in state["cooked"]:
+                return False
+        else:
+            raise ValueError(f"unknown goal fact {fact!r}")
+    return True
+
+
+def belief_surface(world: World, surface: str) -> Surface:
+    """A world surface as the belief layer's axis-aligned rectangle."""
+    lo, hi, z = world.surface_world_rect(surface)
+    return Surface(surface, tuple((lo + hi) / 2), tuple((hi - lo) / 2), z)
+
+
+def _place_random(world: World, rng: np.random.Generator, obj: str, surface: str) -> None:
+    from streams.kitchen import KitchenStreams
+
+    ks = KitchenStreams(world, rng, max_attempts=200)
+    for (p,) in ks.sample_placements(obj, surface):
+        world.place_object(obj, surface, p.rel)
+        return
+    raise RuntimeError(f"no placement of {obj} on {surface}")
+
+
+def _place_occluder(world: World, rng: np.random.Generator, box: str) -> bool:
+    """Put ``box`` on the counter between the camera and the block, facing the camera."""
+    from streams.kitchen import KitchenStreams, ObjPose
+
+    ks = KitchenStreams(world, rng)
+    (bx, by, _), _ = world.object_pose("block")
+    u = np.array([bx, by]) - np.asarray(world.camera_eye[:2])
+    u /= np.linalg.norm(u)
+    for _ in range(50):
+        d = world.half_extents[box][1] + rng.uniform(0.03, 0.06)
+        lateral = rng.uniform(-0.01, 0.01)
+        x, y = np.array([bx, by]) - d * u + lateral * np.array([-u[1], u[0]])
+        yaw = float(np.arctan2(u[1], u[0]) + np.pi / 2 + rng.uniform(-0.1, 0.1))
+        p = ObjPose(box, "counter", world.rest_pose(box, "counter", x, y, yaw))
+        if not ks.placement_valid(p):
+            continue
+        world.place_object(box, "counter", p.rel)
+        if visible_fraction(world, "block") <= 0.1:
+            return True
+        world.remove_object(box)
+    return False
+
+
+def make_task(name: str, seed: int, *, gui: bool = False) -> Task:
+    """Generate task ``name`` (one of :data:`TASKS`) from ``seed``."""
+    if name not in TASKS:
+        raise ValueError(f"unknown task {name!r}; expected one of {TASKS}")
+    rng = np.random.default_rng(seed)
+    world = World(gui=gui)
+    for obj in world.objects:
+        world.remove_object(obj)
+    for d in DRAWERS:
+        world.set_drawer(d, 0.0)
+    base = np.asarray(PARK_BASE) + rng.uniform(-0.1, 0.1, size=3) * (1.0, 1.0, 0.5)
+    world.set_base(tuple(float(v) for v in base))
+    world.set_arm(ARM_TUCK)
+    both = [("top_drawer", 0.5), ("bottom_drawer", 0.5)]
+    if name == "inspect":
+        _place_random(world, rng, "block", "bottom_drawer")
+        prior, goal = (
+            {"block": both},
+            (("On", "block", "bottom_drawer"), ("Closed", "bottom_drawer")),
+        )
+    elif name == "swap":
+        _place_random(world, rng, "block", "top_drawer")
+        prior, goal = (
+            {"block": both},
+            (("On", "block", "bottom_drawer"), ("Closed", "bottom_drawer")),
+        )
+    elif name == "stow":
+        world.set_drawer("top_drawer", DRAWER_TRAVEL)
+        _place_random(world, rng, "sugar_box", "top_drawer")
+        _place_random(world, rng, "block", "counter")
+        prior = {"block": [("counter", 1.0)], "sugar_box": [("top_drawer", 1.0)]}
+        goal = (("On", "block", "top_drawer"), ("Closed", "top_drawer"))
+    else:  # cook
+        prior = {o: [("counter", 1.0)] for o in ("block", "cracker_box", "sugar_box")}
+        goal = (("Cooked", "block"),)
+        for _ in range(100):
+            for o in ("block", "cracker_box", "sugar_box"):
+                world.remove_object(o)
+            _place_random(world, rng, "block", "counter")
+            first = ("cracker_box", "sugar_box")[int(rng.integers(2))]
+            other = "sugar_box" if first == "cracker_box" else "cracker_box"
+            if _place_occluder(world, rng, first):
+                _place_random(world, rng, other, "counter")
+                break
+        else:  # pragma: no cover - the counter is large enough for this never to happen
+            raise RuntimeError("could not generate a Cook problem")
+    task = Task(name, seed, world, prior, goal)
+    task.latent = world.true_state()
+    return task
