@@ -543,6 +543,7 @@ def parse_text(
     ``kind`` ("domain", "problem" or "stream") makes any other kind an error.  Warnings (such as
     ignored trailing text) are appended to ``warnings`` as ``"file:line:col: message"``.
     """
+    _refuse_control_characters(text, filename)
     try:
         node, notes = parser().parse(text)
     except _Problem as p:
@@ -567,6 +568,25 @@ def parse_text(
     if warnings is not None:
         warnings.extend(f"{filename}:{w}" for w in notes)
     return node
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
+
+
+def _refuse_control_characters(text: str, filename: str) -> None:
+    """A PDDL file is plain text: control characters (even in comments) mean a damaged file."""
+    m = _CONTROL.search(text)
+    if m:
+        pos = m.start()
+        line = text.count("\n", 0, pos) + 1
+        col = pos - (text.rfind("\n", 0, pos) + 1) + 1
+        raise PDDLSyntaxError(
+            f"found the control character {m.group()!r}; expected plain text (is this a binary file?)",
+            file=filename,
+            line=line,
+            col=col,
+            source=text,
+        )
 
 
 def read_source(path: str | Path) -> str:

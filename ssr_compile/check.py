@@ -1,0 +1,636 @@
+"""Semantic checks of domains, problems and stream files.
+
+Errors: undeclared predicates, functions, types and constants; wrong numbers of arguments;
+free variables; a stream's certified facts mentioning variables that are neither inputs nor
+outputs; outputs used in a stream's domain; duplicate names.  Warnings (as pddlstream itself
+only warns): requirements used but not declared, predicates a stream file uses that the domain
+does not declare, cost functions used without a declaration.
+
+A problem or stream file is checked against its domain when one is given.  Every finding
+carries file:line:col from the node's source span.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from . import syntax as S
+from .errors import CheckError
+
+BUILTIN_TYPES = frozenset({"object", "number"})
+COST = "total-cost"
+
+
+@dataclass
+class Report:
+    """What checking one file found."""
+
+    filename: str
+    source: str | None = None
+    errors: list[CheckError] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    def error(self, message: str, span: S.Span | None) -> None:
+        self.errors.append(
+            CheckError(
+                message,
+                file=self.filename,
+                line=span.line if span else None,
+                col=span.col if span else None,
+                source=self.source,
+            )
+        )
+
+    def warn(self, message: str, span: S.Span | None = None) -> None:
+        where = f"{self.filename}:{span}" if span else self.filename
+        self.warnings.append(f"{where}: warning: {message}")
+
+    @property
+    def ok(self) -> bool:
+        return not self.errors
+
+    def raise_first(self) -> None:
+        if self.errors:
+            raise sorted(self.errors, key=lambda e: (e.line or 0, e.col or 0))[0]
+
+
+# ---------------------------------------------------------------- the vocabulary of a domain
+
+
+@dataclass
+class Vocabulary:
+    """Declared names and arities, from a domain (and, optionally, its stream file)."""
+
+    predicates: dict[str, int] = field(default_factory=dict)
+    functions: dict[str, int] = field(default_factory=dict)
+    constants: dict[str, S.TypeRef] = field(default_factory=dict)
+    types: set[str] = field(default_factory=set)
+    typed: bool = False
+    # Predicates certified or declared only by the stream file: name -> arity.
+    stream_predicates: dict[str, int] = field(default_factory=dict)
+    stream_functions: dict[str, int] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, domain: S.Domain | None, streams: S.StreamFile | None = None) -> Vocabulary:
+        v = cls()
+        if domain is not None:
+            v.predicates = {p.name: len(p.params) for p in domain.predicates}
+            for ax in domain.axioms:
+                v.predicates.setdefault(ax.name, len(ax.parameters))
+            v.functions = {f.name: len(f.params) for f in domain.functions}
+            v.constants = {c.name: c.type for c in domain.constants}
+            v.types = {t.name for t in domain.types} | {
+                t.type for t in domain.types if isinstance(t.type, str)
+            }
+            v.typed = bool(domain.types)
+        if streams is not None:
+            for name, arity in _stream_file_predicates(streams).items():
+                if name not in v.predicates:
+                    v.stream_predicates.setdefault(name, arity)
+            v.stream_functions = {f.name: len(f.params) for f in streams.functions}
+        return v
+
+    def predicate_arity(self, name: str) -> int | None:
+        if name in self.predicates:
+            return self.predicates[name]
+        return self.stream_predicates.get(name)
+
+
+def _stream_file_predicates(f: S.StreamFile) -> dict[str, int]:
+    """Predicates a stream file mentions (certified, in domains, declared), with arities."""
+    out: dict[str, int] = {}
+    for s in f.streams:
+        for formula in (s.domain, s.certified):
+            for a in atoms(formula):
+                out.setdefault(a.pred, len(a.args))
+    for r in f.rules:
+        for formula in (r.domain, r.certified):
+            for a in atoms(formula):
+                out.setdefault(a.pred, len(a.args))
+    for p in f.predicates:
+        out.setdefault(p.name, len(p.params))
+        for a in atoms(p.domain):
+            out.setdefault(a.pred, len(a.args))
+    for fn in f.functions:
+        for a in atoms(fn.domain):
+            out.setdefault(a.pred, len(a.args))
+    out.pop("=", None)
+    return out
+
+
+def atoms(f) -> list[S.Atom]:
+    """Every atom in a formula or effect (in order)."""
+    out: list[S.Atom] = []
+
+    def visit(x):
+        if isinstance(x, S.Atom):
+            out.append(x)
+        elif isinstance(x, (S.And, S.Or)):
+            for a in x.args:
+                visit(a)
+        elif isinstance(x, S.Not):
+            visit(x.arg)
+        elif isinstance(x, S.Imply):
+            visit(x.left)
+            visit(x.right)
+        elif isinstance(x, (S.Exists, S.Forall)):
+            visit(x.body)
+        elif isinstance(x, S.When):
+            visit(x.condition)
+            visit(x.effect)
+        elif isinstance(x, S.Timed):
+            visit(x.body)
+
+    visit(f)
+    return out
+
+
+# ---------------------------------------------------------------- formulas
+
+
+class _FormulaChecker:
+    """Walks a formula or effect with the variables in scope, reporting into ``report``."""
+
+    def __init__(
+        self,
+        report: Report,
+        vocab: Vocabulary,
+        objects: dict[str, S.TypeRef] | None = None,
+        *,
+        constants_known: bool = True,
+    ):
+        self.r = report
+        self.constants_known = constants_known
+        self.v = vocab
+        self.objects = objects if objects is not None else {}
+        self.used: set[str] = set()  # requirement flags the formulas need
+
+    def formula(self, f, scope: frozenset[str], where: str, effect: bool = False) -> None:
+        if f is None:
+            return
+        if isinstance(f, S.Atom):
+            self.atom(f, scope, where)
+        elif isinstance(f, S.And):
+            for a in f.args:
+                self.formula(a, scope, where, effect)
+        elif isinstance(f, S.Or):
+            self.used.add(":disjunctive-preconditions")
+            for a in f.args:
+                self.formula(a, scope, where, effect)
+        elif isinstance(f, S.Not):
+            if not effect:
+                self.used.add(":negative-preconditions")
+            self.formula(f.arg, scope, where, effect)
+        elif isinstance(f, S.Imply):
+            self.used.add(":disjunctive-preconditions")
+            self.formula(f.left, scope, where)
+            self.formula(f.right, scope, where)
+        elif isinstance(f, (S.Exists, S.Forall)):
+            if isinstance(f, S.Exists):
+                self.used.add(":existential-preconditions")
+            else:
+                self.used.add(":conditional-effects" if effect else ":universal-preconditions")
+            self.params(f.params, where)
+            self.formula(f.body, scope | {p.name for p in f.params}, where, effect)
+        elif isinstance(f, S.When):
+            self.used.add(":conditional-effects")
+            self.formula(f.condition, scope, where)
+            self.formula(f.effect, scope, where, effect=True)
+        elif isinstance(f, S.Compare):
+            self.used.add(":numeric-fluents")
+            self.num(f.left, scope, where)
+            self.num(f.right, scope, where)
+        elif isinstance(f, S.NumericEffect):
+            if f.fluent.name == COST:
+                self.used.add(":action-costs")
+                self.fluent(f.fluent, scope, where)
+                self.num(f.value, scope, where, cost=True)
+            else:
+                self.used.add(":numeric-fluents")
+                self.fluent(f.fluent, scope, where)
+                self.num(f.value, scope, where)
+        elif isinstance(f, S.Timed):
+            self.formula(f.body, scope, where, effect)
+
+    def atom(self, a: S.Atom, scope: frozenset[str], where: str) -> None:
+        if a.pred == "=":
+            self.used.add(":equality")
+        else:
+            arity = self.v.predicate_arity(a.pred)
+            if arity is None:
+                self.r.error(f"undeclared predicate '{a.pred}' in {where}", a.span)
+            elif arity != len(a.args):
+                self.r.error(
+                    f"'{a.pred}' takes {arity} argument{'s' * (arity != 1)}, "
+                    f"found {len(a.args)} in {where}",
+                    a.span,
+                )
+        for t in a.args:
+            self.term(t, scope, where)
+
+    def term(self, t: S.Term, scope: frozenset[str], where: str) -> None:
+        if isinstance(t, S.Var):
+            if t.name not in scope:
+                self.r.error(
+                    f"free variable {t.name} in {where}: not a parameter or quantified", t.span
+                )
+        elif (
+            self.constants_known
+            and t.name not in self.v.constants
+            and t.name not in self.objects
+            and not _numeric(t.name)
+        ):
+            self.r.error(f"undeclared constant '{t.name}' in {where}", t.span)
+
+    def fluent(self, f: S.FuncTerm, scope: frozenset[str], where: str, cost: bool = False) -> None:
+        if f.name == COST:
+            if f.args:
+                self.r.error(f"total-cost takes no arguments, found {len(f.args)}", f.span)
+            if COST not in self.v.functions:
+                self.used.add(":action-costs")
+        else:
+            arity = self.v.functions.get(f.name, self.v.stream_functions.get(f.name))
+            if arity is None:
+                if cost:
+                    # Real files use cost and duration functions without declaring them
+                    # (pddlstream evaluates them through stream functions and only warns).
+                    self.r.warn(f"function '{f.name}' is not declared in :functions", f.span)
+                else:
+                    self.r.error(f"undeclared function '{f.name}' in {where}", f.span)
+            elif arity != len(f.args):
+                self.r.error(
+                    f"'{f.name}' takes {arity} arguments, found {len(f.args)} in {where}", f.span
+                )
+        for t in f.args:
+            self.term(t, scope, where)
+
+    def num(self, e, scope, where, cost: bool = False) -> None:
+        if isinstance(e, S.FuncTerm):
+            self.fluent(e, scope, where, cost)
+        elif isinstance(e, S.Arith):
+            for a in e.args:
+                self.num(a, scope, where, cost)
+        elif isinstance(e, (S.Var, S.Const)):
+            if not (isinstance(e, S.Var) and e.name == "?duration"):
+                self.term(e, scope, where)
+
+    def params(self, params: tuple[S.Typed, ...], where: str) -> None:
+        seen: set[str] = set()
+        for p in params:
+            if p.name in seen:
+                self.r.error(f"duplicate parameter {p.name} in {where}", p.span)
+            seen.add(p.name)
+            self.type_ref(p.type, p.span, where)
+
+    def type_ref(self, t: S.TypeRef, span, where: str) -> None:
+        if t is None:
+            return
+        self.used.add(":typing")
+        for name in t.types if isinstance(t, S.Either) else (t,):
+            if name not in BUILTIN_TYPES and name not in self.v.types:
+                self.r.error(f"undeclared type '{name}' in {where}", span)
+
+
+def _numeric(name: str) -> bool:
+    try:
+        float(name)
+    except ValueError:
+        return False
+    return True
+
+
+def _duplicates(report: Report, items, what: str) -> None:
+    seen: set[str] = set()
+    for item in items:
+        if item.name in seen:
+            report.error(f"duplicate {what} '{item.name}'", item.span)
+        seen.add(item.name)
+
+
+def _duplicate_declarations(report: Report, decls: tuple[S.PredicateDecl, ...]) -> None:
+    """Two declarations of one predicate: a warning when they agree, an error otherwise."""
+    seen: dict[str, S.PredicateDecl] = {}
+    for d in decls:
+        first = seen.get(d.name)
+        if first is None:
+            seen[d.name] = d
+        elif len(first.params) == len(d.params):
+            report.warn(f"predicate '{d.name}' is declared twice (first at {first.span})", d.span)
+        else:
+            report.error(
+                f"predicate '{d.name}' is declared again with {len(d.params)} arguments "
+                f"(first with {len(first.params)} at {first.span})",
+                d.span,
+            )
+
+
+def _requirements(report: Report, declared: tuple[str, ...] | None, used: set[str], span) -> None:
+    if declared is None:
+        return
+    implied = set(declared)
+    if ":adl" in implied:
+        implied |= {
+            ":strips",
+            ":typing",
+            ":negative-preconditions",
+            ":disjunctive-preconditions",
+            ":equality",
+            ":existential-preconditions",
+            ":universal-preconditions",
+            ":conditional-effects",
+        }
+    if ":quantified-preconditions" in implied:
+        implied |= {":existential-preconditions", ":universal-preconditions"}
+    if ":fluents" in implied:
+        implied |= {":numeric-fluents"}
+    missing = sorted(used - implied)
+    if missing:
+        report.warn("uses requirements it does not declare: " + " ".join(missing), span)
+
+
+# ---------------------------------------------------------------- files
+
+
+def check_domain(
+    domain: S.Domain,
+    *,
+    streams: S.StreamFile | None = None,
+    filename: str = "<domain>",
+    source: str | None = None,
+) -> Report:
+    report = Report(filename, source)
+    vocab = Vocabulary.of(domain, streams)
+    fc = _FormulaChecker(report, vocab)
+    _duplicates(report, domain.types, "type")
+    _duplicates(report, domain.constants, "constant")
+    _duplicate_declarations(report, domain.predicates)
+    _duplicates(report, domain.functions, "function")
+    _duplicates(report, (*domain.actions, *domain.durative_actions), "action")
+    for t in domain.types:
+        fc.type_ref(t.type, t.span, "the :types section")
+    for c in domain.constants:
+        fc.type_ref(c.type, c.span, "the :constants section")
+    for p in domain.predicates:
+        fc.params(p.params, f"the declaration of predicate '{p.name}'")
+    for f in domain.functions:
+        fc.params(f.params, f"the declaration of function '{f.name}'")
+    derived_heads: set[str] = set()
+    for ax in domain.axioms:
+        fc.used.add(":derived-predicates")
+        where = f"derived predicate '{ax.name}'"
+        declared = domain.predicates and ax.name in {p.name for p in domain.predicates}
+        if ax.name not in derived_heads and not declared and domain.predicates:
+            report.warn(f"derived predicate '{ax.name}' is not declared in :predicates", ax.span)
+        derived_heads.add(ax.name)
+        fc.params(ax.parameters, where)
+        arity = vocab.predicate_arity(ax.name)
+        if arity is not None and arity != len(ax.parameters):
+            report.error(
+                f"'{ax.name}' takes {arity} arguments, its :derived head has {len(ax.parameters)}",
+                ax.span,
+            )
+        head = frozenset(p.name for p in ax.parameters)
+        extra = []
+        for v in variables(ax.body):
+            if v.name not in head and v.name not in extra:
+                extra.append(v.name)
+                report.warn(
+                    f"variable {v.name} in {where} is not a parameter; it is read as "
+                    "existentially quantified (as Fast Downward reads axiom bodies)",
+                    v.span,
+                )
+        fc.formula(ax.body, head | frozenset(extra), where)
+    for a in domain.actions:
+        where = f"action '{a.name}'"
+        fc.params(a.parameters, where)
+        scope = frozenset(p.name for p in a.parameters)
+        fc.formula(a.precondition, scope, f"the precondition of {where}")
+        fc.formula(a.effect, scope, f"the effect of {where}", effect=True)
+        for atom in atoms(a.effect):
+            if atom.pred in derived_heads:
+                report.error(
+                    f"the effect of {where} changes derived predicate '{atom.pred}'", atom.span
+                )
+    for a in domain.durative_actions:
+        fc.used.add(":durative-actions")
+        where = f"durative action '{a.name}'"
+        fc.params(a.parameters, where)
+        scope = frozenset(p.name for p in a.parameters) | {"?duration"}
+        if isinstance(a.duration, S.Compare):
+            fc.num(a.duration.left, scope, f"the duration of {where}", cost=True)
+            fc.num(a.duration.right, scope, f"the duration of {where}", cost=True)
+        else:
+            fc.formula(a.duration, scope, f"the duration of {where}")
+        fc.formula(a.condition, scope, f"the condition of {where}")
+        fc.formula(a.effect, scope, f"the effect of {where}", effect=True)
+    _requirements(report, domain.requirements, fc.used, domain.span)
+    if streams is not None:
+        for name in sorted(vocab.stream_predicates):
+            used_in_domain = any(
+                a.pred == name
+                for x in (*domain.actions, *domain.axioms)
+                for f in (
+                    getattr(x, "precondition", None),
+                    getattr(x, "effect", None),
+                    getattr(x, "body", None),
+                )
+                for a in atoms(f)
+            )
+            if used_in_domain:
+                report.warn(
+                    f"predicate '{name}' is used by the domain but declared only by the stream file"
+                )
+    return report
+
+
+def check_problem(
+    problem: S.Problem,
+    domain: S.Domain | None = None,
+    *,
+    streams: S.StreamFile | None = None,
+    filename: str = "<problem>",
+    source: str | None = None,
+) -> Report:
+    report = Report(filename, source)
+    _duplicates(report, problem.objects, "object")
+    if domain is None:
+        # Without the domain, only what the file says about itself can be checked.
+        for fact in problem.init:
+            for a in atoms(fact) if not isinstance(fact, S.InitValue) else ():
+                for t in a.args:
+                    if isinstance(t, S.Var):
+                        report.error(f"variable {t.name} in :init; expected an object", t.span)
+        _free_variables(report, problem.goal, frozenset(), "the goal")
+        return report
+    if problem.domain_name is not None and problem.domain_name != domain.name:
+        report.warn(
+            f"the problem is for domain '{problem.domain_name}', checked against '{domain.name}'",
+            problem.span,
+        )
+    vocab = Vocabulary.of(domain, streams)
+    objects = {o.name: o.type for o in problem.objects}
+    fc = _FormulaChecker(report, vocab, objects)
+    for o in problem.objects:
+        fc.type_ref(o.type, o.span, "the :objects section")
+    for fact in problem.init:
+        if isinstance(fact, S.InitValue):
+            fc.fluent(fact.fluent, frozenset(), "the initial state")
+        else:
+            fc.formula(fact, frozenset(), "the initial state", effect=True)
+    fc.formula(problem.goal, frozenset(), "the goal")
+    if problem.metric is not None:
+        fc.num(problem.metric.expr, frozenset(), "the metric", cost=True)
+    return report
+
+
+def check_streams(
+    f: S.StreamFile,
+    domain: S.Domain | None = None,
+    *,
+    filename: str = "<stream>",
+    source: str | None = None,
+) -> Report:
+    report = Report(filename, source)
+    _duplicates(report, f.streams, "stream")
+    _duplicates(report, f.functions, "function")
+    _duplicates(report, f.predicates, "predicate")
+    declared = Vocabulary.of(domain) if domain is not None else None
+    own = _stream_file_predicates(f)
+    # Inside a stream file, every predicate the file mentions is in its vocabulary; a domain
+    # adds constants and checks that arities agree.
+    vocab = Vocabulary(
+        predicates={**own, **(declared.predicates if declared else {})},
+        functions=declared.functions if declared else {},
+        constants=declared.constants if declared else {},
+        types=declared.types if declared else set(),
+    )
+    arities: dict[str, tuple[int, S.Span | None]] = {}
+    # Constants can only be judged against a domain.
+    fc = _FormulaChecker(report, vocab, constants_known=declared is not None)
+
+    def consistent(formula, where):
+        for a in atoms(formula):
+            if a.pred == "=":
+                continue
+            if a.pred in arities and arities[a.pred][0] != len(a.args) and not declared:
+                first = arities[a.pred]
+                report.error(
+                    f"'{a.pred}' has {len(a.args)} arguments in {where} but {first[0]} at {first[1]}",
+                    a.span,
+                )
+            arities.setdefault(a.pred, (len(a.args), a.span))
+
+    for s in f.streams:
+        where = f"stream '{s.name}'"
+        fc.params(s.inputs, f"the inputs of {where}")
+        fc.params(s.outputs, f"the outputs of {where}")
+        inputs = {p.name for p in s.inputs}
+        for o in s.outputs:
+            if o.name in inputs:
+                report.error(f"{o.name} is both an input and an output of {where}", o.span)
+        for v in variables(s.domain):
+            if v.name in {o.name for o in s.outputs}:
+                report.error(
+                    f"output {v.name} is used in the domain of {where}; the domain may only use inputs",
+                    v.span,
+                )
+            elif v.name not in inputs:
+                report.error(
+                    f"free variable {v.name} in the domain of {where}: not an input", v.span
+                )
+        scope = frozenset(inputs | {o.name for o in s.outputs})
+        for v in variables(s.certified):
+            if v.name not in scope:
+                report.error(
+                    f"variable {v.name} in the certified facts of {where} is neither an input nor an output",
+                    v.span,
+                )
+        checker_scope = scope | frozenset(v.name for v in variables(s.domain))
+        fc.formula(s.domain, checker_scope, f"the domain of {where}")
+        fc.formula(s.certified, checker_scope, f"the certified facts of {where}", effect=True)
+        consistent(s.domain, f"the domain of {where}")
+        consistent(s.certified, f"the certified facts of {where}")
+        if declared is not None:
+            for fl in s.fluents:
+                if declared.predicate_arity(fl) is None:
+                    report.error(
+                        f"fluent '{fl}' of {where} is not a predicate of the domain", s.span
+                    )
+    for r in f.rules:
+        scope = frozenset(p.name for p in r.inputs)
+        for formula, what in ((r.domain, "domain"), (r.certified, "certified facts")):
+            for v in variables(formula):
+                if v.name not in scope:
+                    report.error(
+                        f"variable {v.name} in the {what} of a :rule is not an input", v.span
+                    )
+        consistent(r.domain, "a :rule")
+        consistent(r.certified, "a :rule")
+    for group, kind in ((f.functions, "function"), (f.predicates, "predicate")):
+        for d in group:
+            scope = frozenset(p.name for p in d.params)
+            fc.params(d.params, f"{kind} '{d.name}'")
+            for v in variables(d.domain):
+                if v.name not in scope:
+                    report.error(
+                        f"free variable {v.name} in the domain of {kind} '{d.name}'", v.span
+                    )
+            consistent(d.domain, f"{kind} '{d.name}'")
+    if declared is not None:
+        missing = sorted(p for p in own if declared.predicate_arity(p) is None)
+        if missing:
+            report.warn(
+                "predicates used by the stream file but not declared by the domain: "
+                + " ".join(missing)
+            )
+        for name, (arity, span) in sorted(arities.items()):
+            want = declared.predicate_arity(name)
+            if want is not None and want != arity:
+                report.error(f"'{name}' takes {want} arguments in the domain, found {arity}", span)
+    return report
+
+
+def variables(f) -> list[S.Var]:
+    """Free variables of a formula, in order of appearance (quantified ones excluded)."""
+    out: list[S.Var] = []
+
+    def visit(x, bound: frozenset[str]):
+        if isinstance(x, S.Atom):
+            out.extend(t for t in x.args if isinstance(t, S.Var) and t.name not in bound)
+        elif isinstance(x, (S.And, S.Or)):
+            for a in x.args:
+                visit(a, bound)
+        elif isinstance(x, S.Not):
+            visit(x.arg, bound)
+        elif isinstance(x, S.Imply):
+            visit(x.left, bound)
+            visit(x.right, bound)
+        elif isinstance(x, (S.Exists, S.Forall)):
+            visit(x.body, bound | {p.name for p in x.params})
+        elif isinstance(x, S.When):
+            visit(x.condition, bound)
+            visit(x.effect, bound)
+        elif isinstance(x, S.Timed):
+            visit(x.body, bound)
+        elif isinstance(x, S.Compare):
+            for side in (x.left, x.right):
+                out.extend(v for v in _num_vars(side) if v.name not in bound)
+
+    visit(f, frozenset())
+    return out
+
+
+def _num_vars(e) -> list[S.Var]:
+    if isinstance(e, S.Var):
+        return [e]
+    if isinstance(e, S.FuncTerm):
+        return [t for t in e.args if isinstance(t, S.Var)]
+    if isinstance(e, S.Arith):
+        return [v for a in e.args for v in _num_vars(a)]
+    return []
+
+
+def _free_variables(report: Report, f, scope: frozenset[str], where: str) -> None:
+    for v in variables(f):
+        if v.name not in scope:
+            report.error(f"free variable {v.name} in {where}", v.span)
