@@ -525,6 +525,9 @@ def parser() -> Lark:
         lexer="contextual",
         transformer=_Build(),
         maybe_placeholders=False,
+        # Lark keeps the parse tables in the temporary directory, keyed by the grammar's
+        # hash: a new process then starts in ~15 ms instead of ~130 ms.
+        cache=True,
     )
 
 
