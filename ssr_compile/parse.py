@@ -12,7 +12,6 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 
 from lark import Lark, Token, Transformer
@@ -20,6 +19,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from . import syntax as S
 from .errors import PDDLSyntaxError, SSRError
+from .resources import grammar_file
 
 GRAMMAR = "pddlstream.lark"
 
@@ -518,7 +518,7 @@ class _Build(Transformer):
 @lru_cache(maxsize=1)
 def parser() -> Lark:
     """The process-wide parser (built on first use, then reused)."""
-    text = resources.files("ssr_compile.grammar").joinpath(GRAMMAR).read_text(encoding="utf-8")
+    text = grammar_file(GRAMMAR).read_text(encoding="utf-8")
     return Lark(
         text,
         parser="lalr",
