@@ -42,7 +42,7 @@ ARM_REST = (0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.785)
 #: Arm tucked in above the base: used while driving and to clear the camera's view.
 ARM_TUCK = (0.0, -1.2, 0.0, -2.9, 0.0, 1.8, 0.785)
 #: Arm raised ahead of the base: carrying a (tall) object clear of the base and the floor.
-ARM_CARRY = (0.0, -0.3, 0.0, -1.8, 0.0, 1.5, 0.785)
+ARM_CARRY = (0.0, -0.05, 0.0, -1.0, 0.0, 0.95, 0.785)
 
 _BASE_XML = """
   <link name="world">

@@ -85,11 +85,18 @@ class Scripted:
             raise ExecutionError(out.message)
         self.stow_arm()
 
-    def place(self, obj: str, surface: str) -> None:
+    def place(self, obj: str, surface: str, clearance: float = 0.15, rounds: int = 5) -> None:
         held = self.world.held
         if held is None or held.obj != obj:
             raise ExecutionError(f"not holding {obj}")
-        for (p,) in self.ks.sample_placements(obj, surface):
+        others = [
+            np.asarray(self.world.object_pose(o)[0][:2]) for o in self.world.present() if o != obj
+        ]
+        candidates = (p for _ in range(rounds) for p in self.ks.sample_placements(obj, surface))
+        for (p,) in candidates:
+            xy = np.asarray(self.ks.world_pose(p)[0][:2])
+            if any(np.linalg.norm(xy - o) < clearance for o in others):
+                continue  # keep room for the gripper around the other objects
             try:
                 _, (pre, approach) = self._reach(obj, p, tries=1)
             except ExecutionError:

@@ -218,7 +218,13 @@ class KitchenStreams:
     ) -> tuple[Conf, tuple[Conf, ...]] | None:
         """Function stream ``inv-kin``: (pre-grasp arm conf, approach path) for grasping
         ``obj`` at ``p`` with ``g`` from ``base`` (or placing it there when it is held)."""
-        key = (obj, p, g, tuple(base))
+        w = self.world
+        state = (
+            tuple(sorted(w.support.items())),
+            tuple(sorted(w.drawer_q.items())),
+            None if w.held is None else (w.held.obj, w.held.grasp),
+        )
+        key = (obj, p, g, tuple(base), state)
         if key in self._kin_cache:
             return self._kin_cache[key]
         w = self.world
