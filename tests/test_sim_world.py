@@ -1,0 +1,216 @@
+"""World, perception and stream validity of the PyBullet kitchen (paper §III, §IV, §VIII)."""
+
+import numpy as np
+import pytest
+
+from sim.geometry import angle_between, invert, multiply
+from sim.motion import refine
+from sim.perception import is_visible, observe, visible_fraction
+from sim.robot import ARM_TUCK
+from sim.world import DRAWER_TRAVEL, PARK_BASE, World
+from streams.belief import ObservationModel
+from streams.kitchen import KitchenStreams, stream_table
+
+
+@pytest.fixture(scope="module")
+def world():
+    w = World()
+    yield w
+    w.close()
+
+
+@pytest.fixture
+def scene(world):
+    for d in ("top_drawer", "bottom_drawer"):
+        world.set_drawer(d, 0.0)
+    world.held = None
+    world.set_base(PARK_BASE)
+    world.set_arm(ARM_TUCK)
+    world.set_object("block", "counter", 1.0, 0.8, 0.0)
+    world.set_object("sugar_box", "counter", 1.15, 1.05, 0.0)
+    world.set_object("cracker_box", "counter", 1.15, 0.55, 0.0)
+    return world
+
+
+def test_visible_object_reported_hidden_never(scene):
+    exact = ObservationModel(p_fn=0.0)
+    rng = np.random.default_rng(0)
+    assert is_visible(scene, "block")
+    det = observe(scene, rng, exact)
+    assert set(det) == {"block", "sugar_box", "cracker_box"}
+    true = scene.true_state()["objects"]["block"]["pose"]
+    assert np.linalg.norm(np.subtract(det["block"][:3], true[:3])) < 0.06
+    assert det["block"] != tuple(true)  # noisy, never the true pose
+    # Hide the block behind the cracker box, between it and the camera.
+    (bx, by, _), _ = scene.object_pose("block")
+    u = np.array([bx, by]) - np.asarray(scene.camera_eye[:2])
+    u /= np.linalg.norm(u)
+    x, y = np.array([bx, by]) - 0.07 * u
+    scene.set_object("cracker_box", "counter", x, y, float(np.arctan2(u[1], u[0]) + np.pi / 2))
+    assert visible_fraction(scene, "block") < 0.2
+    for _ in range(20):
+        assert "block" not in observe(scene, rng, exact)
+
+
+def test_false_negative_rate(scene):
+    model = ObservationModel(p_fn=0.3)
+    rng = np.random.default_rng(1)
+    hits = sum("block" in observe(scene, rng, model) for _ in range(400))
+    # Binomial(400, 0.7): mean 280, std ~9.2; 4 sigma band.
+    assert 243 <= hits <= 317
+
+
+def test_robot_occludes(scene):
+    # Put the hand on the line of sight from the camera to the block.
+    eye = np.asarray(scene.camera_eye)
+    target = eye + 0.8 * (np.asarray(scene.object_pose("block")[0]) - eye)
+    base = (float(target[0]) - 0.35, float(target[1]), 0.0)
+    res = scene.robot.inverse_kinematics(
+        base, (tuple(target), (1.0, 0.0, 0.0, 0.0)), np.random.default_rng(0)
+    )
+    assert res is not None
+    scene.set_base(base)
+    scene.set_arm(res.conf)
+    frac_robot = visible_fraction(scene, "block")
+    scene.set_base(PARK_BASE)
+    scene.set_arm(ARM_TUCK)
+    assert visible_fraction(scene, "block") == 1.0
+    assert frac_robot < 1.0
+
+
+@pytest.mark.parametrize("drawer", ["top_drawer", "bottom_drawer"])
+def test_closed_drawer_hides_contents(scene, drawer):
+    scene.set_drawer(drawer, DRAWER_TRAVEL)
+    for x in (0.05, 0.2, 0.33):
+        scene.set_object("block", drawer, x, 0.0, 0.3)
+        scene.set_drawer(drawer, DRAWER_TRAVEL)
+        assert is_visible(scene, "block"), x
+        scene.set_drawer(drawer, 0.0)
+        assert visible_fraction(scene, "block") == 0.0
+        assert "block" not in observe(scene, np.random.default_rng(0), ObservationModel(p_fn=0))
+
+
+def test_contents_move_with_drawer(scene):
+    scene.set_drawer("bottom_drawer", 0.1)
+    scene.set_object("block", "bottom_drawer", 0.2, 0.05, 0.0)
+    before = np.asarray(scene.object_pose("block")[0])
+    scene.set_drawer("bottom_drawer", 0.3)
+    after = np.asarray(scene.object_pose("block")[0])
+    assert np.allclose(after - before, (-0.2, 0.0, 0.0), atol=1e-6)
+
+
+def test_sugar_box_blocks_top_drawer(scene):
+    ks = KitchenStreams(scene, np.random.default_rng(2))
+    scene.set_drawer("top_drawer", DRAWER_TRAVEL)
+    scene.set_object("sugar_box", "top_drawer", 0.15, 0.0, 0.0)
+    from sim.actions import execute
+
+    for (base,) in ks.sample_drawer_base("top_drawer"):
+        motion = ks.plan_drawer("top_drawer", DRAWER_TRAVEL, 0.0, base)
+        if motion is not None:
+            break
+    scene.set_base(base)
+    scene.set_arm(motion.arm_path[0])
+    out = execute(scene, motion, np.random.default_rng(0))
+    assert not out.ok and "blocked" in out.message
+    q = scene.drawer_q["top_drawer"]
+    assert 0.02 < q < DRAWER_TRAVEL
+    assert not scene.object_collision("sugar_box")
+    # The block fits: the same push closes the drawer.
+    scene.set_drawer("top_drawer", DRAWER_TRAVEL)
+    scene.set_object("sugar_box", "counter", 1.15, 1.05, 0.0)
+    scene.set_object("block", "top_drawer", 0.15, 0.0, 0.0)
+    scene.set_arm(motion.arm_path[0])
+    assert execute(scene, motion, np.random.default_rng(0)).ok
+    assert scene.drawer_q["top_drawer"] == 0.0
+
+
+def test_stream_outputs_are_valid(scene):
+    rng = np.random.default_rng(3)
+    ks = KitchenStreams(scene, rng)
+    assert {"sample-grasp", "inv-reach", "inv-kin", "plan-arm-motion"} <= set(stream_table(ks))
+    scene.set_drawer("top_drawer", DRAWER_TRAVEL)
+    fine = 0.01
+    for obj, surface in [("block", "top_drawer"), ("sugar_box", "stove"), ("block", "counter")]:
+        placements = [p for (p,), _ in zip(ks.sample_placements(obj, surface), range(3))]
+        assert placements
+        for p in placements:  # stable, inside, collision-free
+            assert scene.inside_surface(obj, surface, p.rel)
+            wp = ks.world_pose(p)
+            assert scene.stable_on(obj, surface, wp) is not None
+            with scene.saved():
+                scene.place_object(obj, surface, p.rel)
+                assert not scene.object_collision(obj)
+    p = ks.current_pose("block")
+    found = 0
+    for (g,) in ks.sample_grasps("block"):
+        for (base,) in ks.inv_reach("block", p, g):
+            pre, approach = ks.inv_kin("block", p, g, base)
+            tool = multiply(ks.world_pose(p), invert(g.pose))
+            reached = scene.robot.forward_kinematics(base, approach[-1])
+            assert np.linalg.norm(np.subtract(reached[0], tool[0])) < 3e-3
+            assert angle_between(reached[1], tool[1]) < 3e-2
+            with scene.saved():
+                scene.set_base(base)
+                for q in refine(approach[:1], fine):
+                    scene.set_arm(q)
+                    assert not scene.robot_collision()
+            (traj,) = ks.plan_arm_motion(base, ARM_TUCK, pre)
+            assert np.allclose(traj[0], ARM_TUCK) and np.allclose(traj[-1], pre)
+            with scene.saved():
+                scene.set_base(base)
+                for q in refine(traj, fine):
+                    scene.set_arm(q)
+                    assert not scene.robot_collision()
+            (btraj,) = ks.plan_base_motion(PARK_BASE, base)
+            with scene.saved():
+                scene.set_arm(ARM_TUCK)
+                for b in refine(btraj, (0.01, 0.01, 0.01)):
+                    scene.set_base(b)
+                    assert not scene.robot_collision()
+            found += 1
+            break
+        if found >= 2:
+            break
+    assert found >= 2
+
+
+def test_grasps_fit_gripper(world):
+    ks = KitchenStreams(world, np.random.default_rng(0))
+    for obj in ("block", "sugar_box", "cracker_box"):
+        gs = ks.grasps(obj)
+        assert {g.kind for g in gs} == {"top", "side"}
+        for g in gs:  # the finger axis (tool y) spans at most the gripper opening
+            tool_in_obj = invert(g.pose)
+            from sim.geometry import quat_to_matrix
+
+            y_axis = quat_to_matrix(tool_in_obj[1])[:, 1]
+            span = 2 * np.abs(y_axis) @ np.asarray(world.half_extents[obj])
+            assert span <= 0.07 + 1e-9
+
+
+def test_drawer_motion_is_collision_free(scene):
+    ks = KitchenStreams(scene, np.random.default_rng(4))
+    (base,) = next(iter(ks.sample_drawer_base("bottom_drawer")))
+    motion = ks.plan_drawer("bottom_drawer", 0.0, DRAWER_TRAVEL, base)
+    assert motion is not None and motion.kind == "pull"
+    with scene.saved():
+        scene.set_base(base)
+        for q_arm, q_d in zip(motion.arm_path, motion.drawer_path, strict=True):
+            scene.set_drawer("bottom_drawer", q_d)
+            scene.set_arm(q_arm)
+            assert not scene.robot_collision()
+    assert scene.drawer_q["bottom_drawer"] == 0.0  # streams leave the world unchanged
+
+
+def test_two_worlds_in_one_process():
+    a, b = World(), World()
+    try:
+        assert a.client != b.client
+        a.set_drawer("top_drawer", 0.3)
+        assert b.drawer_q["top_drawer"] == 0.0
+        a.set_object("block", "counter", 1.0, 0.8, 0.0)
+        assert b.support["block"] is None
+    finally:
+        a.close()
+        b.close()
