@@ -136,3 +136,12 @@ def test_cook_block_is_hidden_initially():
             assert not is_visible(t.world, "block")
         finally:
             t.close()
+
+
+@pytest.mark.parametrize("view", ["camera", "top"])
+def test_render_task_writes_png(tmp_path, view):
+    from sim.render import render_task
+
+    out = render_task("swap", 0, str(tmp_path / "s.png"), view=view)
+    with open(out, "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"

@@ -1,0 +1,65 @@
+"""Median time of the kitchen streams over 20 calls each (DESIGN §2: figures, no assertions).
+
+Run: python bench/stream_bench.py
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from sim.perception import visible_fraction
+from sim.robot import ARM_TUCK
+from sim.world import PARK_BASE, World
+from streams.kitchen import KitchenStreams
+
+N = 20
+
+
+def _median_ms(fn) -> tuple[float, int]:
+    times, ok = [], 0
+    for _ in range(N):
+        t = time.perf_counter()
+        ok += fn() is not None
+        times.append(time.perf_counter() - t)
+    return 1000 * float(np.median(times)), ok
+
+
+def main() -> None:
+    w = World()
+    rng = np.random.default_rng(0)
+    ks = KitchenStreams(w, rng)
+    w.set_object("block", "counter", 1.0, 0.8, 0.0)
+    w.set_object("sugar_box", "counter", 1.15, 1.05, 0.0)
+    w.set_object("cracker_box", "counter", 1.15, 0.55, 0.0)
+    p = ks.current_pose("block")
+    g = ks.grasps("block")[0]
+    base = next(iter(ks.inv_reach("block", p, g)))[0]
+    pre = ks.inv_kin("block", p, g, base)[0]
+    tool = w.robot.forward_kinematics(base, pre)
+    rows = [
+        ("IK (tool pose, restarts)", lambda: w.robot.inverse_kinematics(base, tool, rng)),
+        (
+            "inv-kin (grasp + approach)",
+            lambda: ks._kin_cache.clear() or ks.inv_kin("block", p, g, base),
+        ),
+        ("inv-reach (first base)", lambda: next(iter(ks.inv_reach("block", p, g)), None)),
+        ("arm motion (RRT-Connect)", lambda: ks.plan_arm_motion(base, ARM_TUCK, pre)),
+        ("base motion (RRT-Connect)", lambda: ks.plan_base_motion(PARK_BASE, base)),
+        ("grasp sampling (all)", lambda: list(ks.sample_grasps("sugar_box"))),
+        (
+            "placement sampling (first)",
+            lambda: next(iter(ks.sample_placements("block", "counter")), None),
+        ),
+        ("visibility (10 rays)", lambda: visible_fraction(w, "block")),
+    ]
+    print(f"{'stream':32s} {'median ms':>10s} {'ok/' + str(N):>7s}")
+    for name, fn in rows:
+        ms, ok = _median_ms(fn)
+        print(f"{name:32s} {ms:10.2f} {ok:7d}")
+    w.close()
+
+
+if __name__ == "__main__":
+    main()
