@@ -31,6 +31,10 @@ class Report:
     warnings: list[str] = field(default_factory=list)
 
     def error(self, message: str, span: S.Span | None) -> None:
+        # One error per position: two checks that trip over the same token (a variable that
+        # is neither input nor output is also free) would otherwise say it twice.
+        if span is not None and any(e.line == span.line and e.col == span.col for e in self.errors):
+            return
         self.errors.append(
             CheckError(
                 message,
@@ -270,9 +274,23 @@ class _FormulaChecker:
         elif isinstance(e, S.Arith):
             for a in e.args:
                 self.num(a, scope, where, cost)
+        elif isinstance(e, S.Const) and self._function_name(e.name):
+            # PDDL allows a 0-ary function without parentheses: (:metric minimize total-cost).
+            self.fluent(S.FuncTerm(e.name, (), span=e.span), scope, where, cost)
         elif isinstance(e, (S.Var, S.Const)):
             if not (isinstance(e, S.Var) and e.name == "?duration"):
                 self.term(e, scope, where)
+
+    def _function_name(self, name: str) -> bool:
+        return (
+            (
+                name == COST
+                or self.v.functions.get(name) == 0
+                or self.v.stream_functions.get(name) == 0
+            )
+            and name not in self.v.constants
+            and name not in self.objects
+        )
 
     def params(self, params: tuple[S.Typed, ...], where: str) -> None:
         seen: set[str] = set()

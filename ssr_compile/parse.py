@@ -9,6 +9,7 @@ expected.  The transformer is stateless, so a failed parse leaves the parser usa
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from functools import lru_cache
@@ -90,7 +91,11 @@ def _number(tok: Token) -> int | float:
     try:
         return int(text)
     except ValueError:
-        return float(text)
+        value = float(text)
+    if not math.isfinite(value):
+        # 1e999 would become inf, which no PDDL reader (nor our own printer's output) accepts.
+        raise _Problem(f"the number {text} is too large; expected a finite number", tok)
+    return value
 
 
 def _group(items, what: str) -> tuple[S.Typed, ...]:
@@ -755,6 +760,16 @@ def _end_position(text: str) -> tuple[int, int]:
 def _syntax_error(e: UnexpectedInput, text: str, filename: str) -> PDDLSyntaxError:
     expected = _acceptable(e)
     if isinstance(e, UnexpectedToken) and e.token.type == "$END":
+        if _previous_token(text, len(text)) is None:
+            line, col = 1, 1
+            return PDDLSyntaxError(
+                "the file is empty (nothing but blanks and comments); expected "
+                "(define (domain NAME) ...), (define (problem NAME) ...) or (define (stream NAME) ...)",
+                file=filename,
+                line=line,
+                col=col,
+                source=text,
+            )
         line, col = _end_position(text)
         depth = _open_parens(text)
         hint = f" ({depth} unclosed '(')" if depth > 0 else ""
@@ -772,6 +787,14 @@ def _syntax_error(e: UnexpectedInput, text: str, filename: str) -> PDDLSyntaxErr
         col = pos - (text.rfind("\n", 0, pos) + 1) + 1
     prev = _previous_token(text, pos)
     found = _found(text, pos)
+    if found.strip("'") == ")" and expected == {"$END"}:
+        return PDDLSyntaxError(
+            "found one ')' too many after the end of the file's (define ...)",
+            file=filename,
+            line=line,
+            col=col,
+            source=text,
+        )
     if found.strip("'") == ")" and expected and "RPAR" not in expected:
         found = "')' too early"
     message = f"found {found}; expected {_describe_expected(expected, prev)}"
