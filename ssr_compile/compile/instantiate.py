@@ -1,0 +1,320 @@
+"""Pass 1 — optimistic stream instantiation (paper §IV, §VII; PDDLStream's Focused algorithm).
+
+From the problem's facts (plus stream results already evaluated), instantiate every stream whose
+domain holds, giving each instance fresh optimistic output objects and its certified facts;
+repeat to a fixed point bounded by a *level*: real facts have level 0, and an instance has
+level ``1 + max(levels of its domain facts)``; instances above the level limit are not made.
+Test streams are optimistically true; ``:function`` terms take an optimistic value (from the
+stream info, else the documented default :data:`DEFAULT_FUNCTION_VALUE`).  Every optimistic
+object and fact keeps the stream instance that produced it, so a plan over the compiled
+problem can be traced back to the stream instances it relies on (its stream plan).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import defaultdict
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+
+from .. import syntax as S
+from ..errors import UnsupportedError
+
+# The optimistic value of a cost function whose stream info gives none: the lower bound 1,
+# because planners need strictly positive action costs to make progress (paper §III: c_a > 0).
+DEFAULT_FUNCTION_VALUE = 1.0
+# Safety cap on the number of stream instances of one compilation.
+MAX_INSTANCES = 20000
+
+
+@dataclass(frozen=True)
+class Instance:
+    """One stream (or function) applied to input objects."""
+
+    stream: str
+    inputs: tuple[str, ...]
+    kind: str = "stream"  # "stream", "test" or "function"
+
+    def __str__(self) -> str:
+        return f"{self.stream}({', '.join(self.inputs)})"
+
+
+@dataclass
+class Result:
+    """What one instance certifies: its (optimistic or real) outputs and facts."""
+
+    instance: Instance
+    outputs: tuple[str, ...]
+    certified: tuple[S.Atom, ...]
+    domain: tuple[S.Atom, ...]
+    level: int
+    optimistic: bool = True
+    value: float | None = None  # for functions
+
+
+@dataclass
+class Instantiation:
+    """The optimistic problem and where each of its objects and facts came from."""
+
+    problem: S.Problem
+    results: list[Result]
+    # optimistic object name -> the result that makes it
+    objects: dict[str, Result] = field(default_factory=dict)
+    # certified fact -> the optimistic result(s) that certify it (real facts are absent)
+    facts: dict[S.Atom, list[Result]] = field(default_factory=dict)
+    # function term -> result (optimistic value)
+    functions: dict[S.FuncTerm, Result] = field(default_factory=dict)
+    level: int = 0
+    saturated: bool = True  # False when the level limit cut instantiation short
+
+    def optimistic_objects(self) -> set[str]:
+        return set(self.objects)
+
+
+def optimistic_name(var: str, index: int) -> str:
+    """A fresh object name, accepted by Fast Downward, unified-planning and pyperplan."""
+    return f"opt{index}-{var.lstrip('?')}"
+
+
+def instantiate(
+    domain: S.Domain,
+    streams: S.StreamFile,
+    problem: S.Problem,
+    *,
+    level: int = 3,
+    evaluated: Iterable[Result] = (),
+    disabled: Iterable[Instance] = (),
+    function_values: Mapping[str, float] | None = None,
+    real_function_values: Mapping[S.FuncTerm, float] | None = None,
+    exhausted: Iterable[Instance] = (),
+) -> Instantiation:
+    """Optimistically instantiate ``streams`` over ``problem`` up to ``level``.
+
+    ``evaluated`` are real results (their facts join the initial state at level 0);
+    ``disabled`` instances are not instantiated optimistically (they failed at this level);
+    ``exhausted`` instances have no more outputs (their real results stay, no optimistic one
+    is added); ``function_values`` maps a function name to its optimistic value;
+    ``real_function_values`` gives evaluated function terms their real value.
+    """
+    _refuse_unsupported(streams)
+    disabled = set(disabled) | set(exhausted)
+    function_values = dict(function_values or {})
+    real_function_values = dict(real_function_values or {})
+    taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
+    levels: dict[S.Atom, int] = {}
+    index: dict[str, list[S.Atom]] = defaultdict(list)
+
+    def add_fact(atom: S.Atom, lvl: int) -> bool:
+        if atom in levels and levels[atom] <= lvl:
+            return False
+        if atom not in levels:
+            index[atom.pred].append(atom)
+        levels[atom] = lvl
+        return True
+
+    for fact in problem.init:
+        if isinstance(fact, S.Atom):
+            add_fact(fact, 0)
+    evaluated = list(evaluated)
+    for res in evaluated:
+        for atom in res.certified:
+            add_fact(atom, 0)
+            taken.update(a.name for a in atom.args)
+    _apply_rules(streams, index, add_fact, levels)
+
+    out = Instantiation(problem, [], level=level)
+    new_objects: list[S.Typed] = []
+    new_facts: list[S.Atom] = []
+    counter = itertools.count(1)
+    seen: set[Instance] = set()
+    for res in evaluated:
+        out.results.append(res)
+
+    schemas = [(s, "test" if s.is_test else "stream") for s in streams.streams]
+    for depth in range(1, level + 1):
+        made = []
+        for stream, kind in schemas:
+            for binding, dom_facts in _matches(stream.inputs, stream.domain, index, levels):
+                inst = Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
+                if inst in seen or inst in disabled:
+                    continue
+                inst_level = 1 + max((levels[f] for f in dom_facts), default=0)
+                if inst_level > depth:
+                    continue
+                seen.add(inst)
+                made.append((stream, inst, binding, dom_facts, inst_level))
+        if len(seen) > MAX_INSTANCES:
+            raise UnsupportedError(
+                f"optimistic instantiation made more than {MAX_INSTANCES} stream instances at "
+                f"level {depth}; lower the level or restrict the stream domains"
+            )
+        for stream, inst, binding, dom_facts, inst_level in made:
+            outputs = []
+            full = dict(binding)
+            for o in stream.outputs:
+                name = optimistic_name(o.name, next(counter))
+                while name in taken:
+                    name = optimistic_name(o.name, next(counter))
+                taken.add(name)
+                full[o.name] = name
+                outputs.append(name)
+                new_objects.append(S.Typed(name, o.type))
+            certified = tuple(
+                _ground(a, full) for a in S.conjuncts(stream.certified) if isinstance(a, S.Atom)
+            )
+            res = Result(inst, tuple(outputs), certified, tuple(dom_facts), inst_level)
+            out.results.append(res)
+            for name in outputs:
+                out.objects[name] = res
+            for atom in certified:
+                if atom not in levels or levels[atom] > 0:
+                    out.facts.setdefault(atom, []).append(res)
+                if add_fact(atom, inst_level):
+                    new_facts.append(atom)
+        _apply_rules(streams, index, add_fact, levels)
+        if not made:
+            break
+    else:
+        # The loop ran to the limit: were more instances possible?
+        out.saturated = not any(
+            True
+            for stream, kind in schemas
+            for binding, _f in _matches(stream.inputs, stream.domain, index, levels)
+            if Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
+            not in seen | disabled
+        )
+
+    # Cost functions: every term whose domain holds gets a value (real, else optimistic).
+    values: list[S.InitValue] = []
+    for fn in streams.functions:
+        for binding, dom_facts in _matches(fn.params, fn.domain, index, levels):
+            args = tuple(binding[p.name] for p in fn.params)
+            term = S.FuncTerm(fn.name, tuple(S.Const(a) for a in args))
+            if term in real_function_values:
+                value, optimistic = real_function_values[term], False
+            else:
+                value, optimistic = function_values.get(fn.name, DEFAULT_FUNCTION_VALUE), True
+            lvl = max((levels[f] for f in dom_facts), default=0)
+            res = Result(
+                Instance(fn.name, args, "function"),
+                (),
+                (),
+                tuple(dom_facts),
+                lvl,
+                optimistic,
+                value,
+            )
+            out.functions[term] = res
+            values.append(S.InitValue(term, S.Num(value)))
+
+    all_facts = [
+        a for a in levels if a not in set(f for f in problem.init if isinstance(f, S.Atom))
+    ]
+    init = list(problem.init) + sorted(all_facts, key=_fact_order) + values
+    out.problem = replace(problem, objects=problem.objects + tuple(new_objects), init=tuple(init))
+    return out
+
+
+def _fact_order(a: S.Atom):
+    return (a.pred, tuple(t.name for t in a.args))
+
+
+def _refuse_unsupported(streams: S.StreamFile) -> None:
+    for s in streams.streams:
+        if s.fluents:
+            raise UnsupportedError(
+                f"stream '{s.name}' declares :fluents; streams conditioned on the state are not "
+                "supported by optimistic compilation",
+                line=s.span.line if s.span else None,
+                col=s.span.col if s.span else None,
+            )
+    if streams.optimizers:
+        o = streams.optimizers[0]
+        raise UnsupportedError(
+            f":optimizer '{o.name}' is read and printed, but not compiled",
+            line=o.span.line if o.span else None,
+            col=o.span.col if o.span else None,
+        )
+
+
+def _apply_rules(streams, index, add_fact, levels) -> None:
+    """``:rule`` blocks: their certified facts hold wherever their domain holds."""
+    changed = True
+    while changed and streams.rules:
+        changed = False
+        for rule in streams.rules:
+            for binding, dom_facts in _matches(rule.inputs, rule.domain, index, levels):
+                lvl = max((levels[f] for f in dom_facts), default=0)
+                for a in S.conjuncts(rule.certified):
+                    if isinstance(a, S.Atom) and add_fact(_ground(a, binding), lvl):
+                        changed = True
+
+
+def _ground(atom: S.Atom, binding: Mapping[str, str]) -> S.Atom:
+    return S.Atom(
+        atom.pred,
+        tuple(
+            S.Const(binding[t.name]) if isinstance(t, S.Var) else S.Const(t.name) for t in atom.args
+        ),
+    )
+
+
+def _matches(params, domain, index, levels):
+    """All bindings of ``params`` under which every atom of the conjunctive ``domain`` holds.
+
+    Yields ``(binding, facts)``.  Equality atoms compare the bound names.  Parameters that
+    no atom mentions cannot be bound and give no match (as in PDDLStream).
+    """
+    atoms = [a for a in S.conjuncts(domain)]
+    for a in atoms:
+        if not isinstance(a, S.Atom):
+            raise UnsupportedError(
+                f"stream domains must be conjunctions of atoms; found {type(a).__name__.lower()}",
+                line=getattr(a.span, "line", None),
+                col=getattr(a.span, "col", None),
+            )
+    positive = [a for a in atoms if a.pred != "="]
+    equalities = [a for a in atoms if a.pred == "="]
+    # Most selective atoms first.
+    positive.sort(key=lambda a: len(index.get(a.pred, ())))
+    names = [p.name for p in params]
+
+    def extend(i: int, binding: dict[str, str], used: list[S.Atom]):
+        if i == len(positive):
+            if all(n in binding for n in names) and all(_eq_holds(e, binding) for e in equalities):
+                yield dict(binding), list(used)
+            return
+        pattern = positive[i]
+        for fact in list(index.get(pattern.pred, ())):
+            new = _unify(pattern, fact, binding)
+            if new is not None:
+                used.append(fact)
+                yield from extend(i + 1, new, used)
+                used.pop()
+
+    yield from extend(0, {}, [])
+
+
+def _unify(pattern: S.Atom, fact: S.Atom, binding: dict[str, str]) -> dict[str, str] | None:
+    if len(pattern.args) != len(fact.args):
+        return None
+    new = binding
+    for p, f in zip(pattern.args, fact.args):
+        if isinstance(p, S.Var):
+            bound = new.get(p.name)
+            if bound is None:
+                if new is binding:
+                    new = dict(binding)
+                new[p.name] = f.name
+            elif bound != f.name:
+                return None
+        elif p.name != f.name:
+            return None
+    return new
+
+
+def _eq_holds(atom: S.Atom, binding: dict[str, str]) -> bool:
+    left, right = (
+        binding.get(t.name, t.name) if isinstance(t, S.Var) else t.name for t in atom.args
+    )
+    return left == right

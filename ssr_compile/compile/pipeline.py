@@ -1,0 +1,128 @@
+"""The whole compilation: PDDLStream (domain, streams, problem) -> plain cost-PDDL for a backend.
+
+Passes, each a module of this package: instantiate (optimistic stream instantiation), derived
+(axioms kept or compiled away), costs (integer action costs), constraints (Algorithm 2, when a
+plan tail is given), lower (fit the backend's capabilities).  The result keeps what is needed
+to map a plan back to the input's names and to the stream instances it relies on.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
+
+from .. import syntax as S
+from ..check import atoms
+from .constraints import Constrained, constrain_plan
+from .instantiate import Instance, Instantiation, Result, instantiate
+from .lower import Lowered, lower
+
+Plan = list[tuple[str, tuple[str, ...]]]
+
+
+@dataclass(frozen=True)
+class FullCapabilities:
+    """Everything supported: compile for Fast Downward-like backends (and artifacts)."""
+
+    costs: bool = True
+    axioms: bool = True
+    negative_preconditions: bool = True
+    disjunction: bool = True
+    quantifiers: bool = True
+    conditional_effects: bool = True
+    optimal: bool = False
+
+
+@dataclass
+class Compiled:
+    """A compiled problem: the plain domain and problem, and the maps back."""
+
+    domain: S.Domain  # after lowering: what the planner reads
+    problem: S.Problem
+    source_domain: S.Domain  # before lowering (optimistic facts added, axioms kept)
+    source_problem: S.Problem
+    instantiation: Instantiation | None
+    lowered: Lowered
+    constrained: Constrained | None = None
+
+    @property
+    def scale(self) -> int:
+        return self.lowered.scale
+
+    def map_plan(self, plan: Plan) -> Plan:
+        """A planner's plan, in the names of the input domain."""
+        plan = self.lowered.map_plan(plan)
+        if self.constrained is not None:
+            plan = self.constrained.map_plan(plan)
+        return plan
+
+
+def declare_stream_predicates(domain: S.Domain, streams: S.StreamFile | None) -> S.Domain:
+    """Declare, in the domain, the predicates that only the stream file mentions."""
+    if streams is None:
+        return domain
+    declared = {p.name for p in domain.predicates} | {ax.name for ax in domain.axioms}
+    extra: dict[str, int] = {}
+    for s in streams.streams:
+        for formula in (s.domain, s.certified):
+            for a in atoms(formula):
+                if a.pred not in declared and a.pred != "=":
+                    extra.setdefault(a.pred, len(a.args))
+    for r in streams.rules:
+        for a in atoms(r.certified):
+            if a.pred not in declared and a.pred != "=":
+                extra.setdefault(a.pred, len(a.args))
+    if not extra:
+        return domain
+    new = tuple(
+        S.PredicateDecl(name, tuple(S.Typed(f"?x{i}") for i in range(arity)))
+        for name, arity in sorted(extra.items())
+    )
+    return replace(domain, predicates=domain.predicates + new)
+
+
+def compile_problem(
+    domain: S.Domain,
+    streams: S.StreamFile | None,
+    problem: S.Problem,
+    *,
+    caps=FullCapabilities(),
+    level: int = 3,
+    evaluated: Iterable[Result] = (),
+    disabled: Iterable[Instance] = (),
+    exhausted: Iterable[Instance] = (),
+    function_values: Mapping[str, float] | None = None,
+    real_function_values: Mapping[S.FuncTerm, float] | None = None,
+    plan_tail: Sequence[tuple[str, Sequence[str]]] | None = None,
+    is_constant: Callable[[str], bool] | None = None,
+    scale: int | None = None,
+    unit_cost: bool = False,
+) -> Compiled:
+    """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
+    inst = None
+    if streams is not None:
+        inst = instantiate(
+            domain,
+            streams,
+            problem,
+            level=level,
+            evaluated=evaluated,
+            disabled=disabled,
+            exhausted=exhausted,
+            function_values=function_values,
+            real_function_values=real_function_values,
+        )
+        problem = inst.problem
+        domain = declare_stream_predicates(domain, streams)
+    source_domain, source_problem = domain, problem
+    constrained = None
+    if plan_tail:
+        constrained = constrain_plan(domain, problem, plan_tail, is_constant or (lambda v: False))
+        domain, problem = constrained.domain, constrained.problem
+    cost_functions = {f.name for f in streams.functions} if streams is not None else set()
+    lowered = lower(
+        domain, problem, caps, cost_functions=cost_functions, scale=scale, unit_cost=unit_cost
+    )
+    return Compiled(
+        lowered.domain, lowered.problem, source_domain, source_problem, inst, lowered, constrained
+    )

@@ -1,0 +1,297 @@
+"""The preimage of a plan: which static facts (and so which stream instances) it relies on.
+
+The plan is simulated over the optimistic problem.  Each action's precondition (and the goal)
+is evaluated with *support tracking*: a true atom is supported by itself; ``(not p)`` with
+``p`` derived is supported by the facts that make every way of deriving ``p`` fail — e.g.
+``(not (BOccluded ?o ?obs))`` rests on the ``BVis`` fact of every other object at its current
+belief (paper §IV-A), and a placement free of collisions on its ``CFree`` tests.  The static
+facts in the supports, and the optimistic objects in the plan's arguments and cost terms,
+name the stream results the plan needs; back-chaining through their domain facts gives the
+stream plan (PDDLStream's Focused algorithm, paper §VII).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import defaultdict
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+from . import syntax as S
+from .compile.formulas import substitute
+from .compile.instantiate import Instantiation, Result
+from .errors import SSRError
+
+Plan = Sequence[tuple[str, Sequence[str]]]
+
+
+class PlanInvalid(SSRError):
+    """The plan does not apply to the problem (a precondition or the goal fails)."""
+
+
+@dataclass
+class Preimage:
+    static_facts: set[S.Atom] = field(default_factory=set)
+    cost_terms: set[S.FuncTerm] = field(default_factory=set)
+    # For each plan step, the static facts its precondition needed.
+    per_step: list[set[S.Atom]] = field(default_factory=list)
+    goal_facts: set[S.Atom] = field(default_factory=set)
+
+
+class _Evaluator:
+    def __init__(self, domain: S.Domain, objects: list[str], static: set[str]):
+        self.axioms: dict[str, list[S.Axiom]] = defaultdict(list)
+        for ax in domain.axioms:
+            self.axioms[ax.name].append(ax)
+        self.objects = objects
+        self.static = static
+        self.state: set[S.Atom] = set()
+        self.index: dict[str, list[S.Atom]] = defaultdict(list)
+        self.cache: dict[tuple[S.Atom, bool], tuple[bool, frozenset]] = {}
+
+    def set_state(self, state: set[S.Atom]) -> None:
+        self.state = state
+        self.index = defaultdict(list)
+        for a in state:
+            self.index[a.pred].append(a)
+        self.cache = {}
+
+    # holds(f) -> (truth, support): support is a frozenset of static atoms the truth rests on.
+    def holds(self, f, negate: bool = False) -> tuple[bool, frozenset]:
+        if f is None:
+            return (not negate), frozenset()
+        if isinstance(f, S.Atom):
+            return self.atom(f, negate)
+        if isinstance(f, S.Not):
+            return self.holds(f.arg, not negate)
+        if isinstance(f, S.And | S.Or):
+            conj = isinstance(f, S.And) != negate  # "all parts must be true (after negation)"
+            support: set = set()
+            if conj:
+                for part in f.args:
+                    ok, sup = self.holds(part, negate)
+                    if not ok:
+                        return False, frozenset()
+                    support |= sup
+                return True, frozenset(support)
+            for part in f.args:
+                ok, sup = self.holds(part, negate)
+                if ok:
+                    return True, sup
+            return False, frozenset()
+        if isinstance(f, S.Imply):
+            return self.holds(S.Or((S.Not(f.left), f.right)), negate)
+        if isinstance(f, S.Exists | S.Forall):
+            existential = isinstance(f, S.Exists) != negate
+            support = set()
+            for binding in self.bindings(f.params, f.body):
+                ok, sup = self.holds(substitute(f.body, binding), negate)
+                if existential and ok:
+                    return True, sup
+                if not existential:
+                    if not ok:
+                        return False, frozenset()
+                    support |= sup
+            return (not existential), frozenset(support)
+        if isinstance(f, S.Compare):
+            raise SSRError("numeric conditions are not supported in plan preimages")
+        raise SSRError(f"cannot evaluate {type(f).__name__} in a precondition")
+
+    def atom(self, a: S.Atom, negate: bool) -> tuple[bool, frozenset]:
+        if a.pred == "=":
+            left, right = a.args
+            return (left.name == right.name) != negate, frozenset()
+        key = (a, negate)
+        if key in self.cache:
+            return self.cache[key]
+        if a.pred in self.axioms:
+            result = self.derived(a, negate)
+        else:
+            present = a in self.state
+            truth = present != negate
+            # A true static fact supports the condition; absent facts need no stream.
+            support = frozenset({a}) if (present and a.pred in self.static) else frozenset()
+            result = (truth, support if truth else frozenset())
+        self.cache[key] = result
+        return result
+
+    def derived(self, a: S.Atom, negate: bool) -> tuple[bool, frozenset]:
+        support: set = set()
+        for ax in self.axioms[a.pred]:
+            binding = {p.name: arg for p, arg in zip(ax.parameters, a.args)}
+            body = substitute(ax.body, binding)
+            ok, sup = self.holds(body, False)
+            if ok and not negate:
+                return True, sup
+            if ok and negate:
+                return False, frozenset()
+            if negate:
+                # Why the body fails: its negation holds, with a support.
+                _, why = self.holds(body, True)
+                support |= why
+        return negate, frozenset(support)
+
+    def bindings(self, params: tuple[S.Typed, ...], body):
+        """Candidate bindings for quantified variables: joined from the body's positive atoms."""
+        names = [p.name for p in params]
+        positives = [
+            x for x in S.conjuncts(body) if isinstance(x, S.Atom) and x.pred not in self.axioms
+        ]
+        covered = {t.name for x in positives for t in x.args if isinstance(t, S.Var)}
+        if positives and set(names) <= covered:
+            seen = set()
+            for binding in self._join(positives, {}):
+                key = tuple(binding.get(n) for n in names)
+                if None in key or key in seen:
+                    continue
+                seen.add(key)
+                yield {n: S.Const(v) for n, v in zip(names, key)}
+            return
+        for combo in itertools.product(self.objects, repeat=len(names)):
+            yield {n: S.Const(v) for n, v in zip(names, combo)}
+
+    def _join(self, atoms, binding):
+        if not atoms:
+            yield binding
+            return
+        first, rest = atoms[0], atoms[1:]
+        for fact in self.index.get(first.pred, ()):
+            new = dict(binding)
+            ok = True
+            for p, v in zip(first.args, fact.args):
+                if isinstance(p, S.Var):
+                    if p.name in new and new[p.name] != v.name:
+                        ok = False
+                        break
+                    new[p.name] = v.name
+                elif p.name != v.name:
+                    ok = False
+                    break
+            if ok and len(first.args) == len(fact.args):
+                yield from self._join(rest, new)
+
+
+def fluent_predicates(domain: S.Domain) -> set[str]:
+    out = set()
+    for a in domain.actions:
+        _effect_atoms(a.effect, out)
+    return out
+
+
+def _effect_atoms(effect, out: set[str]) -> None:
+    if isinstance(effect, S.Atom):
+        out.add(effect.pred)
+    elif isinstance(effect, S.Not):
+        _effect_atoms(effect.arg, out)
+    elif isinstance(effect, S.And):
+        for e in effect.args:
+            _effect_atoms(e, out)
+    elif isinstance(effect, S.Forall):
+        _effect_atoms(effect.body, out)
+    elif isinstance(effect, S.When):
+        _effect_atoms(effect.effect, out)
+
+
+def _apply(effect, state: set[S.Atom], ev: _Evaluator, adds: set, dels: set, costs: list) -> None:
+    if effect is None:
+        return
+    if isinstance(effect, S.And):
+        for e in effect.args:
+            _apply(e, state, ev, adds, dels, costs)
+    elif isinstance(effect, S.Atom):
+        adds.add(effect)
+    elif isinstance(effect, S.Not):
+        dels.add(effect.arg)
+    elif isinstance(effect, S.When):
+        ok, _ = ev.holds(effect.condition)
+        if ok:
+            _apply(effect.effect, state, ev, adds, dels, costs)
+    elif isinstance(effect, S.Forall):
+        for binding in ev.bindings(
+            effect.params, effect.body.condition if isinstance(effect.body, S.When) else effect.body
+        ):
+            _apply(substitute(effect.body, binding), state, ev, adds, dels, costs)
+    elif isinstance(effect, S.NumericEffect):
+        if isinstance(effect.value, S.FuncTerm):
+            costs.append(effect.value)
+
+
+def plan_preimage(domain: S.Domain, problem: S.Problem, plan: Plan) -> Preimage:
+    """Simulate ``plan`` and collect the static facts its preconditions and goal rest on."""
+    schemas = {a.name: a for a in domain.actions}
+    static = {p.name for p in domain.predicates} - fluent_predicates(domain)
+    static |= {f.pred for f in problem.init if isinstance(f, S.Atom)} - fluent_predicates(domain)
+    objects = [o.name for o in problem.objects] + [c.name for c in domain.constants]
+    ev = _Evaluator(domain, objects, static)
+    state = {f for f in problem.init if isinstance(f, S.Atom)}
+    out = Preimage()
+    for i, (name, args) in enumerate(plan, start=1):
+        schema = schemas.get(name)
+        if schema is None:
+            raise PlanInvalid(f"step {i}: unknown action '{name}'")
+        if len(args) != len(schema.parameters):
+            raise PlanInvalid(
+                f"step {i}: '{name}' takes {len(schema.parameters)} arguments, got {len(args)}"
+            )
+        binding = {p.name: S.Const(v) for p, v in zip(schema.parameters, args)}
+        ev.set_state(state)
+        ok, support = ev.holds(substitute(schema.precondition, binding))
+        if not ok:
+            raise PlanInvalid(
+                f"step {i}: the precondition of ({name} {' '.join(args)}) does not hold"
+            )
+        out.per_step.append(set(support))
+        out.static_facts |= support
+        adds: set = set()
+        dels: set = set()
+        costs: list = []
+        _apply(substitute(schema.effect, binding), state, ev, adds, dels, costs)
+        out.cost_terms.update(costs)
+        state = (state - dels) | adds
+    ev.set_state(state)
+    ok, support = ev.holds(problem.goal)
+    if not ok:
+        raise PlanInvalid("the goal does not hold at the end of the plan")
+    out.goal_facts = set(support)
+    out.static_facts |= support
+    return out
+
+
+def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
+    """The optimistic stream results a plan needs, producers before consumers.
+
+    Needed: results certifying a static fact of the preimage, results making an optimistic
+    object that appears in the plan, and optimistic cost-function terms; then, recursively,
+    the producers of the optimistic objects and facts in their inputs and domains.
+    """
+    needed: list[Result] = []
+    seen: set[int] = set()
+
+    def need(res: Result) -> None:
+        if id(res) in seen or not res.optimistic:
+            return
+        seen.add(id(res))
+        for obj in res.instance.inputs:
+            if obj in inst.objects:
+                need(inst.objects[obj])
+        for fact in res.domain:
+            for producer in inst.facts.get(fact, ())[:1]:
+                need(producer)
+        needed.append(res)
+
+    for fact in sorted(pre.static_facts, key=lambda a: (a.pred, str(a))):
+        for producer in inst.facts.get(fact, ())[:1]:
+            need(producer)
+    for _, args in plan:
+        for v in args:
+            if v in inst.objects:
+                need(inst.objects[v])
+    for term in sorted(pre.cost_terms, key=str):
+        res = inst.functions.get(term)
+        if res is not None:
+            need(res)
+    return needed
+
+
+def results_by_object(results: Iterable[Result]) -> dict[str, Result]:
+    return {o: r for r in results for o in r.outputs}

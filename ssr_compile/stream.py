@@ -1,0 +1,306 @@
+"""The Python stream API (paper §IV; DESIGN §4 "Streams").
+
+A stream declared in a stream file is implemented by a Python callable bound by name:
+
+* generator stream — ``f(*inputs)`` returns an iterable (possibly endless, possibly lazy) of
+  output tuples;
+* function stream — returns one output tuple, or ``None`` when it fails (a stream whose
+  :class:`StreamInfo` says ``kind="function"``, or any callable that returns a tuple or None);
+* test stream (no outputs) — returns a bool;
+* cost function (``:function``) — returns a number (``None`` or infinity: not applicable).
+
+A *streams module* binds them.  The plain form always works: a Python module (import path or
+file path) with a dict ``STREAMS`` (stream name -> callable), an optional dict ``STREAM_INFO``
+(name -> :class:`StreamInfo` or a dict of its fields) and an optional dict ``VALUES`` (object
+name of the problem -> Python value; objects not in ``VALUES`` are passed as their names).
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import inspect
+import math
+import sys
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from . import syntax as S
+from .errors import StreamError
+
+
+@dataclass(frozen=True)
+class StreamInfo:
+    """What the solver knows of a stream before calling it.
+
+    ``deferrable``: may its evaluation wait until the next replanning (paper §VII)?  Mark only
+    streams that are expensive *and* almost always succeed (motion planning).
+    ``p_success``: probability that a call succeeds (orders the stream plan: likely failures
+    first).  ``cost``: expected cost of a call, in seconds or any consistent unit.
+    ``optimistic_value``: for a cost function, the value planned with before evaluation (a
+    lower bound; default 1).  ``kind``: "generator" (default for streams with outputs),
+    "function" (at most one output tuple), or "test".
+    """
+
+    deferrable: bool = False
+    p_success: float = 1.0
+    cost: float = 1.0
+    optimistic_value: float | None = None
+    kind: str | None = None
+
+    @classmethod
+    def of(cls, value: StreamInfo | Mapping[str, Any] | None, name: str) -> StreamInfo:
+        if value is None:
+            return cls()
+        if isinstance(value, StreamInfo):
+            return value
+        if isinstance(value, Mapping):
+            known = {f.name for f in fields(cls)}
+            unknown = set(value) - known
+            if unknown:
+                raise StreamError(
+                    f"STREAM_INFO['{name}'] has unknown field(s) {sorted(unknown)}; expected {sorted(known)}"
+                )
+            return cls(**value)
+        raise StreamError(
+            f"STREAM_INFO['{name}'] must be a StreamInfo or a dict, not {type(value).__name__}"
+        )
+
+
+@dataclass
+class StreamsModule:
+    """Stream implementations, their info, and the Python values of problem objects."""
+
+    name: str
+    streams: dict[str, Callable] = field(default_factory=dict)
+    info: dict[str, StreamInfo] = field(default_factory=dict)
+    values: dict[str, Any] = field(default_factory=dict)
+    module: Any = None
+
+    def info_for(self, name: str) -> StreamInfo:
+        return self.info.get(name, StreamInfo())
+
+    def check_against(self, stream_file: S.StreamFile, filename: str | None = None) -> None:
+        """Every stream and function the file declares must have a callable."""
+        declared = [s.name for s in stream_file.streams] + [f.name for f in stream_file.functions]
+        declared += [p.name for p in stream_file.predicates]
+        missing = [n for n in declared if n not in self.streams]
+        if missing:
+            first = next(
+                x
+                for x in (*stream_file.streams, *stream_file.functions, *stream_file.predicates)
+                if x.name == missing[0]
+            )
+            raise StreamError(
+                f"the streams module '{self.name}' does not implement {', '.join(missing)} "
+                f"(its STREAMS has: {', '.join(sorted(self.streams)) or 'nothing'})",
+                file=filename,
+                line=first.span.line if first.span else None,
+                col=first.span.col if first.span else None,
+            )
+        for name, fn in self.streams.items():
+            if not callable(fn):
+                raise StreamError(f"STREAMS['{name}'] in '{self.name}' is not callable")
+
+
+def load_streams_module(spec: str, *, search: list[Path] | None = None) -> StreamsModule:
+    """Import a streams module by import path (``streams.tamp2d``) or file path (``x/y.py``)."""
+    try:
+        if spec.endswith(".py") or "/" in spec or Path(spec).exists():
+            path = Path(spec)
+            if not path.exists():
+                raise StreamError(f"streams module file '{spec}' does not exist")
+            mod_name = f"_ssr_streams_{path.stem}_{abs(hash(str(path.resolve())))}"
+            loader_spec = importlib.util.spec_from_file_location(mod_name, path)
+            if loader_spec is None or loader_spec.loader is None:
+                raise StreamError(f"cannot import '{spec}' as a Python module")
+            module = importlib.util.module_from_spec(loader_spec)
+            sys.modules[mod_name] = module
+            loader_spec.loader.exec_module(module)
+        else:
+            added = []
+            for p in search or []:
+                if str(p) not in sys.path:
+                    sys.path.insert(0, str(p))
+                    added.append(str(p))
+            try:
+                module = importlib.import_module(spec)
+            finally:
+                for p in added:
+                    sys.path.remove(p)
+    except StreamError:
+        raise
+    except ModuleNotFoundError as e:
+        raise StreamError(f"cannot import streams module '{spec}': {e}") from None
+    except Exception as e:  # the module itself failed while importing
+        raise StreamError(
+            f"streams module '{spec}' failed to import: {type(e).__name__}: {e}"
+        ) from None
+    return from_module(module, spec)
+
+
+def from_module(module, name: str | None = None) -> StreamsModule:
+    """Read ``STREAMS``, ``STREAM_INFO`` and ``VALUES`` from an imported module (or object)."""
+    name = name or getattr(module, "__name__", "streams")
+    streams = getattr(module, "STREAMS", None)
+    if not isinstance(streams, Mapping):
+        raise StreamError(f"streams module '{name}' has no dict STREAMS (stream name -> callable)")
+    info_raw = getattr(module, "STREAM_INFO", {}) or {}
+    if not isinstance(info_raw, Mapping):
+        raise StreamError(f"STREAM_INFO in '{name}' must be a dict")
+    values = getattr(module, "VALUES", {}) or {}
+    if not isinstance(values, Mapping):
+        raise StreamError(f"VALUES in '{name}' must be a dict")
+    return StreamsModule(
+        name,
+        {k.lower(): v for k, v in streams.items()},
+        {k.lower(): StreamInfo.of(v, k) for k, v in info_raw.items()},
+        {k.lower(): v for k, v in values.items()},
+        module,
+    )
+
+
+# ---------------------------------------------------------------- values and names
+
+
+class ValueTable:
+    """Python values keyed by object name (DESIGN §4 "Values and names").
+
+    Objects of the problem map to their ``VALUES`` entry (or to their own name); every new
+    value a stream produces gets a fresh name ``v<N>`` (equal hashable values share a name).
+    """
+
+    def __init__(self, values: Mapping[str, Any], taken: set[str]):
+        self._by_name: dict[str, Any] = dict(values)
+        self._by_value: dict[Any, str] = {}
+        self._taken = set(taken) | set(values)
+        self._count = 0
+        for n, v in self._by_name.items():
+            key = _key(v)
+            if key is not None:
+                self._by_value.setdefault(key, n)
+
+    def value(self, name: str) -> Any:
+        return self._by_name.get(name, name)
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._by_name
+
+    def name_for(self, value: Any, hint: str = "v") -> str:
+        key = _key(value)
+        if key is not None and key in self._by_value:
+            return self._by_value[key]
+        prefix = "".join(ch for ch in hint.lstrip("?").lower() if ch.isalnum() or ch == "-") or "v"
+        if not prefix[0].isalpha():
+            prefix = "v" + prefix
+        while True:
+            self._count += 1
+            name = f"{prefix}-{self._count}"
+            if name not in self._taken:
+                break
+        self._taken.add(name)
+        self._by_name[name] = value
+        if key is not None:
+            self._by_value[key] = name
+        return name
+
+    def names(self) -> list[str]:
+        return list(self._by_name)
+
+
+def _key(value: Any):
+    try:
+        hash(value)
+    except TypeError:
+        return None
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    return (type(value).__name__, value)
+
+
+# ---------------------------------------------------------------- calling streams
+
+
+class Generator:
+    """The outputs of one stream instance, drawn one tuple at a time (lazily)."""
+
+    def __init__(self, fn: Callable, args: tuple, kind: str, name: str):
+        self.fn = fn
+        self.args = args
+        self.kind = kind
+        self.name = name
+        self.calls = 0
+        self.exhausted = False
+        self._it: Iterator | None = None
+
+    def next(self) -> tuple | None:
+        """The next output tuple, or None (failure now; ``exhausted`` says if for good)."""
+        self.calls += 1
+        if self.exhausted:
+            return None
+        try:
+            if self.kind == "function":
+                self.exhausted = True
+                out = self.fn(*self.args)
+                return _as_tuple(out, self.name)
+            if self._it is None:
+                produced = self.fn(*self.args)
+                if produced is None:
+                    self.exhausted = True
+                    return None
+                if isinstance(produced, tuple) or not (
+                    inspect.isgenerator(produced) or hasattr(produced, "__iter__")
+                ):
+                    # A callable that returns one tuple behaves as a function stream.
+                    self.exhausted = True
+                    return _as_tuple(produced, self.name)
+                self._it = iter(produced)
+            out = next(self._it)
+        except StopIteration:
+            self.exhausted = True
+            return None
+        except StreamError:
+            raise
+        except Exception as e:
+            raise StreamError(f"stream '{self.name}' raised {type(e).__name__}: {e}") from e
+        if out is None:  # a generator may yield None to say "nothing this time"
+            return None
+        return _as_tuple(out, self.name)
+
+
+def _as_tuple(out, name: str) -> tuple | None:
+    if out is None:
+        return None
+    if isinstance(out, list):
+        out = tuple(out)
+    if not isinstance(out, tuple):
+        raise StreamError(f"stream '{name}' must produce output tuples, got {type(out).__name__}")
+    return out
+
+
+def call_test(fn: Callable, args: tuple, name: str) -> bool:
+    try:
+        return bool(fn(*args))
+    except Exception as e:
+        raise StreamError(f"test stream '{name}' raised {type(e).__name__}: {e}") from e
+
+
+def call_function(fn: Callable, args: tuple, name: str) -> float | None:
+    """A cost function's value; None, NaN and infinity mean not applicable."""
+    try:
+        value = fn(*args)
+    except Exception as e:
+        raise StreamError(f"cost function '{name}' raised {type(e).__name__}: {e}") from e
+    if value is None:
+        return None
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise StreamError(f"cost function '{name}' returned {value!r}, expected a number") from None
+    if math.isnan(value) or math.isinf(value):
+        return None
+    if value < 0:
+        raise StreamError(f"cost function '{name}' returned the negative cost {value}")
+    return value
