@@ -1,0 +1,92 @@
+"""The planner backend protocol (DESIGN §4 "Planner backend").
+
+A backend takes a plain cost-PDDL domain and problem (syntax trees, no streams) and returns a
+:class:`PlanResult`.  It states what it supports in :class:`Capabilities`, so that the compiler
+can lower a problem to fit it before calling :meth:`Planner.solve`; a backend handed something
+outside its capabilities answers with status ``"error"`` and a message instead of crashing.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from typing import Protocol, runtime_checkable
+
+from ..syntax import Domain, Problem
+
+SOLVED = "solved"
+UNSOLVABLE = "unsolvable"
+TIMEOUT = "timeout"
+ERROR = "error"
+STATUSES = (SOLVED, UNSOLVABLE, TIMEOUT, ERROR)
+
+GroundAction = tuple[str, tuple[str, ...]]
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """The PDDL features a backend accepts (and whether its plans are cost-optimal)."""
+
+    costs: bool
+    axioms: bool
+    negative_preconditions: bool
+    disjunction: bool
+    quantifiers: bool
+    conditional_effects: bool
+    optimal: bool = False
+
+    def as_dict(self) -> dict[str, bool]:
+        return asdict(self)
+
+
+@dataclass
+class PlanResult:
+    """The answer of one planner call.
+
+    ``actions`` are ground actions ``(name, args)`` in the input's (lower-case) names, present
+    only when ``status == "solved"``; ``cost`` is the plan's cost under the problem's metric
+    (the sum of action costs), or the number of actions when the problem has no metric.
+    """
+
+    status: str
+    actions: list[GroundAction] | None
+    cost: float | None
+    time: float
+    planner: str
+    message: str = ""
+
+    @property
+    def solved(self) -> bool:
+        return self.status == SOLVED
+
+    def plan_text(self) -> str:
+        """The plan in the usual ``(name arg ...)`` one-action-per-line form."""
+        return "".join("(" + " ".join([n, *args]) + ")\n" for n, args in self.actions or ())
+
+
+@runtime_checkable
+class Planner(Protocol):
+    name: str
+    capabilities: Capabilities
+
+    def solve(
+        self,
+        domain: Domain,
+        problem: Problem,
+        time_limit: float = 60.0,
+        cost_bound: float | None = None,
+    ) -> PlanResult: ...
+
+
+class Clock:
+    """Wall-clock time since construction and what remains of a limit."""
+
+    def __init__(self, limit: float):
+        self.start = time.monotonic()
+        self.limit = limit
+
+    def elapsed(self) -> float:
+        return time.monotonic() - self.start
+
+    def remaining(self) -> float:
+        return max(0.0, self.limit - self.elapsed())

@@ -1,0 +1,65 @@
+"""The cost of a plan under a problem's metric, computed from the syntax tree.
+
+Backends report costs in different ways (Fast Downward prints one, unified-planning and
+pyperplan do not), so every backend computes :attr:`PlanResult.cost` here: the sum of the
+``(increase (total-cost) v)`` effects of the plan's actions, where ``v`` is a number or a static
+function looked up in the initial state, or the plan's length when the problem has no metric.
+"""
+
+from __future__ import annotations
+
+from .. import syntax as S
+from ..errors import UnsupportedError
+from .base import GroundAction
+
+
+def plan_cost(domain: S.Domain, problem: S.Problem, actions: list[GroundAction]) -> float:
+    if problem.metric is None:
+        return len(actions)
+    values = {
+        (v.fluent.name, tuple(a.name for a in v.fluent.args)): v.value.value
+        for v in problem.init
+        if isinstance(v, S.InitValue)
+    }
+    by_name = {a.name: a for a in domain.actions}
+    total: float = 0
+    for name, args in actions:
+        action = by_name.get(name)
+        if action is None:
+            raise UnsupportedError(f"plan uses unknown action {name!r}")
+        binding = {p.name: a for p, a in zip(action.parameters, args)}
+        for e in _cost_effects(action.effect):
+            total += _value(e.value, binding, values)
+    return total
+
+
+def _cost_effects(f) -> list[S.NumericEffect]:
+    if isinstance(f, S.And):
+        return [e for a in f.args for e in _cost_effects(a)]
+    if (
+        isinstance(f, S.NumericEffect)
+        and f.op == "increase"
+        and f.fluent.name == "total-cost"
+        and not f.fluent.args
+    ):
+        return [f]
+    return []
+
+
+def _value(e, binding: dict[str, str], values: dict) -> float:
+    if isinstance(e, S.Num):
+        return e.value
+    if isinstance(e, S.FuncTerm):
+        key = (e.name, tuple(binding.get(a.name, a.name) for a in e.args))
+        if key not in values:
+            raise UnsupportedError(f"no initial value for ({' '.join([key[0], *key[1]])})")
+        return values[key]
+    if isinstance(e, S.Arith):
+        xs = [_value(a, binding, values) for a in e.args]
+        if e.op == "-" and len(xs) == 1:
+            return -xs[0]
+        out = xs[0]
+        for x in xs[1:]:
+            out = {"+": out + x, "-": out - x, "*": out * x, "/": out / x}[e.op]
+        return out
+    raise UnsupportedError(f"cannot evaluate cost expression {e!r}")

@@ -1,0 +1,183 @@
+"""Running planner work under a wall-clock limit that is really enforced (DESIGN §7).
+
+Two tools: :func:`run_command` runs a planner binary as a subprocess in its own process group
+and kills the whole group when the limit passes; :func:`run_forked` runs a Python function in a
+forked child (its own session, so helpers it spawns die with it) and returns the function's
+value through a pipe.  Forking keeps the modules the parent has already imported (Fast
+Downward's translator, unified-planning), which is what makes per-call overhead small.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import select
+import signal
+import subprocess
+import time
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+OK = "ok"
+TIMED_OUT = "timeout"
+FAILED = "error"
+
+
+def _descendants(pid: int) -> list[int]:
+    """Processes below ``pid`` (Linux ``/proc``; empty elsewhere).  Needed because some
+    planner wrappers (unified-planning's) start their planner in a session of its own, out of
+    reach of a kill of our child's process group."""
+    parents: dict[int, list[int]] = {}
+    try:
+        entries = os.listdir("/proc")
+    except OSError:
+        return []
+    for entry in entries:
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:
+            continue
+        ppid = int(stat[stat.rindex(b")") + 2 :].split()[1])
+        parents.setdefault(ppid, []).append(int(entry))
+    out, todo = [], [pid]
+    while todo:
+        for child in parents.get(todo.pop(), []):
+            out.append(child)
+            todo.append(child)
+    return out
+
+
+def _kill_tree(pid: int) -> None:
+    """Kill ``pid``'s process group and every process below it, with their groups."""
+    below = _descendants(pid)
+    _kill_group(pid)
+    for p in below:
+        _kill_group(p)
+
+
+def _kill_group(pid: int) -> None:
+    try:
+        os.killpg(pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        # The child may not have become a group leader yet: kill it alone.
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+
+def run_command(
+    cmd: list[str],
+    timeout: float,
+    *,
+    cwd: str,
+    stdin_path: str | None = None,
+    log_path: str | None = None,
+) -> int | None:
+    """Run ``cmd`` in a new process group; its exit code, or ``None`` if it was killed at
+    ``timeout`` seconds.  Output goes to ``log_path`` (or is discarded)."""
+    stdin = open(stdin_path, "rb") if stdin_path else subprocess.DEVNULL
+    log = open(log_path, "wb") if log_path else subprocess.DEVNULL
+    try:
+        proc = subprocess.Popen(
+            cmd, stdin=stdin, stdout=log, stderr=subprocess.STDOUT, cwd=cwd, start_new_session=True
+        )
+        try:
+            return proc.wait(timeout=max(timeout, 0.0))
+        except subprocess.TimeoutExpired:
+            _kill_group(proc.pid)
+            proc.wait()
+            return None
+        except BaseException:  # KeyboardInterrupt: never leave a planner running
+            _kill_group(proc.pid)
+            proc.wait()
+            raise
+    finally:
+        for f in (stdin, log):
+            if not isinstance(f, int):
+                f.close()
+
+
+def can_fork() -> bool:
+    return hasattr(os, "fork")
+
+
+def run_forked(
+    fn: Callable[..., Any], args: tuple = (), *, timeout: float, log_path: str | None = None
+) -> tuple[str, Any]:
+    """Call ``fn(*args)`` in a forked child killed after ``timeout`` seconds.
+
+    Returns ``("ok", value)``, ``("timeout", None)`` or ``("error", message)`` where the message
+    is the end of the child's traceback.  ``value`` must be picklable.  The child's stdout and
+    stderr go to ``log_path`` (or are discarded).  Without ``os.fork`` the call runs in-process
+    and the limit is not enforced.
+    """
+    if not can_fork():
+        try:
+            return OK, fn(*args)
+        except Exception as e:  # noqa: BLE001 - reported as a planner error
+            return FAILED, f"{type(e).__name__}: {e}"
+    read_fd, write_fd = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # child: never return into the caller's code
+        code = 0
+        try:
+            os.close(read_fd)
+            os.setsid()
+            out = os.open(log_path or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.dup2(out, 1)
+            os.dup2(out, 2)
+            try:
+                payload = (OK, fn(*args))
+            except BaseException as e:  # noqa: BLE001
+                tail = traceback.format_exception(type(e), e, e.__traceback__)[-3:]
+                payload = (FAILED, "".join(tail).strip())
+            data = pickle.dumps(payload)
+            view = memoryview(data)
+            while view:
+                view = view[os.write(write_fd, view) :]
+        except BaseException:  # noqa: BLE001
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(write_fd)
+    deadline = time.monotonic() + max(timeout, 0.0)
+    chunks: list[bytes] = []
+    timed_out = False
+    try:
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                timed_out = True
+                break
+            ready, _, _ = select.select([read_fd], [], [], left)
+            if not ready:
+                continue
+            chunk = os.read(read_fd, 1 << 16)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    except BaseException:
+        _kill_tree(pid)
+        os.waitpid(pid, 0)
+        os.close(read_fd)
+        raise
+    os.close(read_fd)
+    if timed_out:
+        _kill_tree(pid)
+        os.waitpid(pid, 0)
+        return TIMED_OUT, None
+    # Helpers the child started and left behind go with its group (killed before the child is
+    # reaped, so that its process id cannot have been reused).
+    _kill_group(pid)
+    _, status = os.waitpid(pid, 0)
+    if not chunks:
+        return FAILED, f"worker process died (wait status {status})"
+    try:
+        return pickle.loads(b"".join(chunks))
+    except Exception as e:  # noqa: BLE001
+        return FAILED, f"unreadable worker result: {e}"
