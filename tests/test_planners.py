@@ -1,0 +1,206 @@
+"""Planner backends: each built-in on small fixtures, costs, axioms, unsolvable tasks, time
+limits, name mapping, cost bounds and the entry-point registry."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import time
+from pathlib import Path
+
+import pytest
+
+from ssr_compile.errors import SSRError
+from ssr_compile.parse import parse_text
+from ssr_compile.planners import (
+    GROUP,
+    Capabilities,
+    PlanResult,
+    available_planners,
+    describe_planners,
+    get_planner,
+)
+from ssr_compile.planners.rename import rename_task
+from ssr_compile.planners.validate import validate_plan
+
+FIXTURES = Path(__file__).parent / "fixtures" / "planners"
+BUILTINS = ["fd", "fd:opt", "pyperplan", "up:fast-downward", "up:pyperplan"]
+_CACHE: dict[str, object] = {}
+
+
+def load(domain: str, problem: str):
+    return (
+        parse_text((FIXTURES / f"{domain}-domain.pddl").read_text(), f"{domain}-domain.pddl"),
+        parse_text((FIXTURES / f"{problem}-problem.pddl").read_text(), f"{problem}-problem.pddl"),
+    )
+
+
+def planner(spec: str):
+    if spec not in _CACHE:
+        _CACHE[spec] = get_planner(spec)
+    return _CACHE[spec]
+
+
+def assert_valid(domain, problem, result: PlanResult) -> None:
+    assert result.status == "solved", result.message
+    ok, why = validate_plan(domain, problem, result.actions)
+    assert ok, f"{result.planner} returned an invalid plan: {why}\n{result.plan_text()}"
+
+
+@pytest.mark.parametrize("spec", BUILTINS)
+def test_blocks_solved_and_valid(spec):
+    domain, problem = load("blocks", "blocks")
+    result = planner(spec).solve(domain, problem, time_limit=20)
+    assert_valid(domain, problem, result)
+    assert result.cost == len(result.actions) == 6
+    assert result.planner == spec and result.time > 0
+
+
+@pytest.mark.parametrize("spec", ["fd", "pyperplan", "up:fast-downward"])
+def test_goal_already_true_gives_empty_plan(spec):
+    domain, problem = load("blocks", "blocks-solved")
+    result = planner(spec).solve(domain, problem, time_limit=20)
+    assert (result.status, result.actions, result.cost) == ("solved", [], 0)
+
+
+@pytest.mark.parametrize("spec", ["fd", "fd:opt", "up:fast-downward-opt"])
+def test_cheaper_plan_chosen_with_static_cost_function(spec):
+    domain, problem = load("travel", "travel")
+    result = planner(spec).solve(domain, problem, time_limit=20)
+    assert_valid(domain, problem, result)
+    assert [name for name, _ in result.actions] == ["drive"] * 3
+    assert result.cost == 4
+
+
+def test_up_reads_cost_functions():
+    # lama-first ignores costs and flies; the reported cost must still be the metric's.
+    domain, problem = load("travel", "travel")
+    result = planner("up:fast-downward").solve(domain, problem, time_limit=20)
+    assert_valid(domain, problem, result)
+    assert result.cost in (4, 10)
+
+
+def test_fd_derived_predicate():
+    domain, problem = load("reach", "reach")
+    result = planner("fd").solve(domain, problem, time_limit=20)
+    assert result.status == "solved", result.message
+    assert result.actions == [("move", ("p1", "p2")), ("move", ("p2", "p3"))]
+    opt = planner("fd:opt").solve(domain, problem, time_limit=20)  # LM-cut falls back to blind
+    assert opt.status == "solved" and opt.cost == 2, opt.message
+
+
+@pytest.mark.parametrize("spec", ["pyperplan", "up:fast-downward"])
+def test_unsupported_features_give_an_error_result(spec):
+    domain, problem = load("reach", "reach")
+    result = planner(spec).solve(domain, problem, time_limit=20)
+    assert result.status == "error" and "derived predicates" in result.message
+
+
+@pytest.mark.parametrize("spec", ["fd", "fd:opt", "pyperplan", "up:fast-downward"])
+@pytest.mark.parametrize("problem", ["blocks-unreachable", "pigeons-small"])
+def test_unsolvable(spec, problem):
+    domain, task = load(problem.split("-")[0], problem)
+    result = planner(spec).solve(domain, task, time_limit=20)
+    assert result.status == "unsolvable", result.message
+    assert result.actions is None and result.message
+
+
+@pytest.mark.parametrize("spec", ["fd", "pyperplan", "up:fast-downward"])
+def test_time_limit_honoured(spec):
+    domain, problem = load("pigeons", "pigeons-hard")
+    limit = 1.5
+    start = time.monotonic()
+    result = planner(spec).solve(domain, problem, time_limit=limit)
+    elapsed = time.monotonic() - start
+    assert result.status == "timeout", result.message
+    assert limit - 0.1 <= elapsed <= limit + 1.0
+    assert result.time == pytest.approx(elapsed, abs=0.2)
+
+
+@pytest.mark.parametrize("spec", ["fd", "up:fast-downward", "up:pyperplan", "pyperplan"])
+def test_clashing_names_mapped_back(spec):
+    domain, problem = load("clash", "clash")
+    result = planner(spec).solve(domain, problem, time_limit=20)
+    assert_valid(domain, problem, result)
+    names = {name for name, _ in result.actions}
+    assert "carry" in names and names <= {"carry", "drop", "walk"}
+    assert {a for _, args in result.actions for a in args} <= {"box", "drop", "kitchen", "walk"}
+
+
+def test_renaming_separates_namespaces_and_maps_back():
+    domain, problem = load("clash", "clash")
+    dom, _, renaming = rename_task(domain, problem)
+    names = [a.name for a in dom.actions] + [p.name for p in dom.predicates]
+    names += [t.name for t in dom.types]
+    assert len(names) == len(set(names))
+    renamed = [(renaming.actions.get("carry", "carry"), (renaming.objects["box"], "kitchen"))]
+    assert renaming.plan_back(renamed) == [("carry", ("box", "kitchen"))]
+
+
+@pytest.mark.parametrize("spec", ["fd", "fd:opt", "up:fast-downward-opt"])
+def test_cost_bound(spec):
+    domain, problem = load("travel", "travel")
+    below = planner(spec).solve(domain, problem, time_limit=20, cost_bound=5)
+    assert below.status == "solved" and below.cost == 4
+    tight = planner(spec).solve(domain, problem, time_limit=20, cost_bound=4)
+    assert tight.status == "unsolvable" and "bound" in tight.message
+
+
+def test_cost_bound_checked_after_the_fact_for_pyperplan():
+    domain, problem = load("blocks", "blocks")
+    result = planner("pyperplan").solve(domain, problem, time_limit=20, cost_bound=6)
+    assert result.status == "unsolvable" and "bound" in result.message
+
+
+def test_unknown_planner_lists_installed():
+    with pytest.raises(SSRError) as err:
+        get_planner("no-such-planner")
+    assert "fd" in str(err.value) and "pyperplan" in str(err.value)
+    with pytest.raises(SSRError):
+        get_planner("up:no-such-engine")
+    with pytest.raises(SSRError):
+        get_planner("fd:no-such-search")
+
+
+class _Echo:
+    """A third-party planner that returns a fixed plan."""
+
+    name = "echo"
+    capabilities = Capabilities(False, False, False, False, False, False)
+
+    def solve(self, domain, problem, time_limit=60.0, cost_bound=None):
+        return PlanResult("solved", [], 0, 0.0, self.name)
+
+
+def make_echo(variant=None, **options):
+    return _Echo()
+
+
+def test_third_party_entry_point(monkeypatch):
+    real = importlib.metadata.entry_points
+    extra = importlib.metadata.EntryPoint(name="echo", value=f"{__name__}:make_echo", group=GROUP)
+
+    def entry_points(**params):
+        found = list(real(**params))
+        return found + [extra] if params.get("group") == GROUP else found
+
+    monkeypatch.setattr("ssr_compile.planners.entry_points", entry_points)
+    assert "echo" in available_planners() and "fd" in available_planners()
+    echo = get_planner("echo")
+    domain, problem = load("blocks", "blocks-solved")
+    assert echo.solve(domain, problem).status == "solved"
+    rows = {row["name"]: row for row in describe_planners()}
+    assert rows["echo"]["entry_point"].endswith(":make_echo")
+
+
+def test_describe_lists_builtins_with_capabilities():
+    rows = {row["name"]: row for row in describe_planners()}
+    assert {"fd", "fd:opt", "pyperplan", "up:fast-downward"} <= set(rows)
+    assert rows["fd"]["capabilities"]["axioms"] is True
+    assert rows["pyperplan"]["capabilities"]["negative_preconditions"] is False
+    assert rows["fd:opt"]["capabilities"]["optimal"] is True
+
+
+def test_validator_rejects_a_bad_plan():
+    domain, problem = load("blocks", "blocks")
+    ok, why = validate_plan(domain, problem, [("stack", ("a", "b"))])
+    assert not ok and why
