@@ -204,3 +204,11 @@ def test_validator_rejects_a_bad_plan():
     domain, problem = load("blocks", "blocks")
     ok, why = validate_plan(domain, problem, [("stack", ("a", "b"))])
     assert not ok and why
+
+
+def test_fd_refuses_fractional_costs_with_a_message():
+    domain, problem = load("travel", "travel")
+    text = (FIXTURES / "travel-problem.pddl").read_text().replace("c d) 2)", "c d) 2.5)")
+    problem = parse_text(text, "travel-fractional.pddl")
+    result = planner("fd").solve(domain, problem, time_limit=20)
+    assert result.status == "error" and "integer costs" in result.message

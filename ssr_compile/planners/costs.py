@@ -33,6 +33,20 @@ def plan_cost(domain: S.Domain, problem: S.Problem, actions: list[GroundAction])
     return total
 
 
+def fractional_costs(domain: S.Domain, problem: S.Problem) -> list[str]:
+    """Cost values that are not integers (Fast Downward accepts integer costs only)."""
+    out = []
+    for a in domain.actions:
+        for e in _cost_effects(a.effect):
+            if isinstance(e.value, S.Num) and not float(e.value.value).is_integer():
+                out.append(f"{a.name}: {e.value.value}")
+    for v in problem.init:
+        if isinstance(v, S.InitValue) and not float(v.value.value).is_integer():
+            args = " ".join(a.name for a in v.fluent.args)
+            out.append(f"({v.fluent.name}{' ' + args if args else ''}) = {v.value.value}")
+    return out
+
+
 def _cost_effects(f) -> list[S.NumericEffect]:
     if isinstance(f, S.And):
         return [e for a in f.args for e in _cost_effects(a)]

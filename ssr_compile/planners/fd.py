@@ -23,7 +23,7 @@ from ..printer import to_text
 from ..syntax import Domain, Problem
 from . import proc
 from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities, Clock, PlanResult
-from .costs import plan_cost
+from .costs import fractional_costs, plan_cost
 from .features import unsupported
 
 # Search configurations; ``{bound}`` receives ``,bound=N`` when a cost bound is given.
@@ -160,13 +160,23 @@ class FastDownward:
         cost_bound: float | None = None,
     ) -> PlanResult:
         clock = Clock(time_limit)
+        tmp = ""
 
         def result(status, message="", actions=None, cost=None):
+            if self.keep_files and tmp:
+                message = f"{message} [files in {tmp}]".strip()
             return PlanResult(status, actions, cost, clock.elapsed(), self.name, message)
 
         missing = unsupported(self.capabilities, domain, problem)
         if missing:
             return result(ERROR, f"{self.name} does not support " + ", ".join(missing))
+        fractional = fractional_costs(domain, problem) if problem.metric is not None else []
+        if fractional:
+            return result(
+                ERROR,
+                "Fast Downward needs integer costs (scale and round them first): "
+                + ", ".join(fractional[:3]),
+            )
         tmp = tempfile.mkdtemp(prefix="ssr-fd-")
         try:
             paths = {k: os.path.join(tmp, k) for k in ("domain.pddl", "problem.pddl")}

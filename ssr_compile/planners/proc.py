@@ -112,7 +112,7 @@ def run_forked(
     """Call ``fn(*args)`` in a forked child killed after ``timeout`` seconds.
 
     Returns ``("ok", value)``, ``("timeout", None)`` or ``("error", message)`` where the message
-    is the end of the child's traceback.  ``value`` must be picklable.  The child's stdout and
+    names the exception the function raised.  ``value`` must be picklable.  The child's stdout and
     stderr go to ``log_path`` (or are discarded).  Without ``os.fork`` the call runs in-process
     and the limit is not enforced.
     """
@@ -134,8 +134,8 @@ def run_forked(
             try:
                 payload = (OK, fn(*args))
             except BaseException as e:  # noqa: BLE001
-                tail = traceback.format_exception(type(e), e, e.__traceback__)[-3:]
-                payload = (FAILED, "".join(tail).strip())
+                traceback.print_exc()  # into the log, for whoever keeps it
+                payload = (FAILED, " ".join(f"{type(e).__name__}: {e}".split()))
             data = pickle.dumps(payload)
             view = memoryview(data)
             while view:

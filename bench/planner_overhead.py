@@ -1,0 +1,62 @@
+"""Per-call time of each planner backend on three small problems (median of N calls).
+
+Prints one row per backend and problem, with the ratio of each backend's median to ``fd``'s
+in the same run.  Usage: ``python bench/planner_overhead.py [--calls 10] [SPEC ...]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+from ssr_compile.parse import parse_text
+from ssr_compile.planners import get_planner
+
+FIXTURES = Path(__file__).resolve().parent.parent / "tests" / "fixtures" / "planners"
+PROBLEMS = [("blocks", "blocks"), ("travel", "travel"), ("clash", "clash")]
+DEFAULT_SPECS = ["fd", "fd:opt", "pyperplan", "up:fast-downward", "up:pyperplan"]
+
+
+def load(domain: str, problem: str):
+    d = FIXTURES / f"{domain}-domain.pddl"
+    p = FIXTURES / f"{problem}-problem.pddl"
+    return parse_text(d.read_text(), d.name), parse_text(p.read_text(), p.name)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("specs", nargs="*", default=DEFAULT_SPECS)
+    ap.add_argument("--calls", type=int, default=10)
+    args = ap.parse_args()
+    specs = ["fd", *(s for s in args.specs if s != "fd")]
+    planners = {s: get_planner(s) for s in specs}
+    rows = []
+    for domain, problem in PROBLEMS:
+        task = load(domain, problem)
+        medians = {}
+        for spec, planner in planners.items():
+            first = planner.solve(*task, time_limit=60)  # warm-up, and the status to show
+            times = []
+            for _ in range(args.calls):
+                start = time.perf_counter()
+                planner.solve(*task, time_limit=60)
+                times.append(time.perf_counter() - start)
+            medians[spec] = statistics.median(times)
+            rows.append((problem, spec, first.status, medians[spec], min(times)))
+        for i in range(len(rows) - len(planners), len(rows)):
+            p, s, st, med, lo = rows[i]
+            rows[i] = (p, s, st, med, lo, med / medians["fd"])
+    head = (
+        f"{'problem':<8} {'planner':<22} {'status':<11} {'median ms':>9} {'min ms':>7} {'x fd':>6}"
+    )
+    print(f"{args.calls} calls per cell")
+    print(head)
+    print("-" * len(head))
+    for p, s, st, med, lo, ratio in rows:
+        print(f"{p:<8} {s:<22} {st:<11} {med * 1e3:9.1f} {lo * 1e3:7.1f} {ratio:6.1f}")
+
+
+if __name__ == "__main__":
+    main()
