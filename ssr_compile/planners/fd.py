@@ -121,6 +121,14 @@ def read_plan(path: str) -> list[tuple[str, tuple[str, ...]]]:
     return actions
 
 
+def _last_plan(path: str) -> str | None:
+    """The plan file, or the best of an anytime search's numbered ones (``sas_plan.N``)."""
+    if os.path.exists(path):
+        return path
+    numbered = [p for p in Path(path).parent.glob(Path(path).name + ".*") if p.suffix[1:].isdigit()]
+    return str(max(numbered, key=lambda p: int(p.suffix[1:]))) if numbered else None
+
+
 class FastDownward:
     """The ``fd`` backend.  ``search`` is a key of :data:`SEARCHES` or a raw ``--search``
     string; ``keep_files`` leaves the temporary directory in place (its path in the message)."""
@@ -219,7 +227,8 @@ class FastDownward:
                 return result(UNSOLVABLE, why)
             if code in _MEMORY_CODES:
                 return result(ERROR, "out of memory")
-            if code != 0 or not os.path.exists(plan_path):
+            plan_path = _last_plan(plan_path)
+            if code != 0 or plan_path is None:
                 return result(ERROR, f"search failed with exit code {code}: {_log_tail(log)}")
             actions = read_plan(plan_path)
             cost = plan_cost(domain, problem, actions)
