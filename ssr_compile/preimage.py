@@ -35,6 +35,7 @@ class Preimage:
     cost_terms: set[S.FuncTerm] = field(default_factory=set)
     # For each plan step, the static facts its precondition needed.
     per_step: list[set[S.Atom]] = field(default_factory=list)
+    per_step_costs: list[set[S.FuncTerm]] = field(default_factory=list)
     goal_facts: set[S.Atom] = field(default_factory=set)
 
 
@@ -247,6 +248,7 @@ def plan_preimage(domain: S.Domain, problem: S.Problem, plan: Plan) -> Preimage:
         costs: list = []
         _apply(substitute(schema.effect, binding), state, ev, adds, dels, costs)
         out.cost_terms.update(costs)
+        out.per_step_costs.append(set(costs))
         state = (state - dels) | adds
     ev.set_state(state)
     ok, support = ev.holds(problem.goal)

@@ -106,17 +106,30 @@ def nnf(f, negate: bool = False):
     raise TypeError(f"not a condition: {type(f).__name__}")
 
 
-def dnf(f) -> list[list]:
-    """Disjunctive normal form of a quantifier-free NNF condition: a list of literal lists."""
+class TooLarge(ValueError):
+    """A normal form would have more clauses than allowed."""
+
+
+def dnf(f, limit: int = 4096) -> list[list]:
+    """Disjunctive normal form of a quantifier-free NNF condition: a list of literal lists.
+
+    Raises :class:`TooLarge` beyond ``limit`` clauses (DNF can grow exponentially).
+    """
     if f is None:
         return [[]]
     if isinstance(f, S.And):
         result: list[list] = [[]]
         for part in f.args:
-            result = [a + b for a, b in itertools.product(result, dnf(part))]
+            options = dnf(part, limit)
+            if len(result) * len(options) > limit:
+                raise TooLarge(f"more than {limit} disjuncts")
+            result = [a + b for a, b in itertools.product(result, options)]
         return result
     if isinstance(f, S.Or):
-        return [clause for part in f.args for clause in dnf(part)]
+        out = [clause for part in f.args for clause in dnf(part, limit)]
+        if len(out) > limit:
+            raise TooLarge(f"more than {limit} disjuncts")
+        return out
     if isinstance(f, S.Exists | S.Forall):
         raise ValueError("quantifiers must be removed before DNF")
     return [[f]]

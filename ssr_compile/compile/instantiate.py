@@ -116,10 +116,16 @@ def instantiate(
         if isinstance(fact, S.Atom):
             add_fact(fact, 0)
     evaluated = list(evaluated)
+    real_objects: list[S.Typed] = []
+    known = set(taken)
     for res in evaluated:
         for atom in res.certified:
             add_fact(atom, 0)
-            taken.update(a.name for a in atom.args)
+            for a in atom.args:
+                if a.name not in known:
+                    known.add(a.name)
+                    real_objects.append(S.Typed(a.name))
+    taken |= known
     _apply_rules(streams, index, add_fact, levels)
 
     out = Instantiation(problem, [], level=level)
@@ -211,7 +217,8 @@ def instantiate(
         a for a in levels if a not in set(f for f in problem.init if isinstance(f, S.Atom))
     ]
     init = list(problem.init) + sorted(all_facts, key=_fact_order) + values
-    out.problem = replace(problem, objects=problem.objects + tuple(new_objects), init=tuple(init))
+    objects = problem.objects + tuple(real_objects) + tuple(new_objects)
+    out.problem = replace(problem, objects=objects, init=tuple(init))
     return out
 
 

@@ -23,7 +23,7 @@ from .. import syntax as S
 from ..errors import UnsupportedError
 from .costs import compile_costs
 from .derived import compile_away, normalise_axiom_bodies
-from .formulas import conj, dnf, has, nnf, substitute
+from .formulas import TooLarge, conj, dnf, has, map_atoms, nnf, substitute
 
 Plan = list[tuple[str, tuple[str, ...]]]
 MAX_EXPANSION = 200_000
@@ -95,7 +95,43 @@ def lower(
         scale=scale,
         unit_cost=unit_cost or not caps.costs,
     )
+    domain = replace(domain, requirements=requirements_of(domain, problem))
+    problem = replace(problem, requirements=None)
     return Lowered(domain, problem, scale, templates)
+
+
+def requirements_of(domain: S.Domain, problem: S.Problem) -> tuple[str, ...]:
+    """The requirement flags the (lowered) domain and problem really use."""
+    used = [":strips"]
+    conds = (
+        [a.precondition for a in domain.actions]
+        + [ax.body for ax in domain.axioms]
+        + [problem.goal]
+    )
+    conds = [c for c in conds if c is not None]
+    effects = [a.effect for a in domain.actions if a.effect is not None]
+    found: list[S.Atom] = []
+    for c in conds:
+        map_atoms(c, lambda a: found.append(a) or a)
+    if domain.types or any(o.type for o in problem.objects):
+        used.append(":typing")
+    if any(has(c, S.Not) for c in conds):
+        used.append(":negative-preconditions")
+    if any(has(c, S.Or, S.Imply) for c in conds):
+        used.append(":disjunctive-preconditions")
+    if any(a.pred == "=" for a in found):
+        used.append(":equality")
+    if any(has(c, S.Exists) for c in conds):
+        used.append(":existential-preconditions")
+    if any(has(c, S.Forall) for c in conds):
+        used.append(":universal-preconditions")
+    if any(has(e, S.When, S.Forall) for e in effects):
+        used.append(":conditional-effects")
+    if domain.axioms:
+        used.append(":derived-predicates")
+    if problem.metric is not None:
+        used.append(":action-costs")
+    return tuple(used)
 
 
 # ---------------------------------------------------------------- quantifiers
@@ -204,7 +240,13 @@ def split_disjunctions(domain: S.Domain, problem: S.Problem):
             raise UnsupportedError(
                 f"action '{a.name}': quantified preconditions need a planner with quantifiers"
             )
-        clauses = [c for c in dnf(pre) if not _contradictory(c)]
+        try:
+            clauses = [c for c in dnf(pre) if not _contradictory(c)]
+        except TooLarge:
+            raise UnsupportedError(
+                f"action '{a.name}': its precondition has too many disjuncts to split for a "
+                "planner without disjunction; use a planner that supports it (such as fd)"
+            ) from None
         if len(clauses) == 1:
             actions.append(replace(a, precondition=conj(*clauses[0]) if clauses[0] else S.And(())))
             continue
@@ -218,7 +260,12 @@ def split_disjunctions(domain: S.Domain, problem: S.Problem):
     goal = problem.goal
     predicates = list(domain.predicates)
     if goal is not None and has(goal, S.Or, S.Imply, S.Not, S.Exists, S.Forall):
-        clauses = [c for c in dnf(nnf(goal)) if not _contradictory(c)]
+        try:
+            clauses = [c for c in dnf(nnf(goal)) if not _contradictory(c)]
+        except TooLarge:
+            raise UnsupportedError(
+                "the goal has too many disjuncts for a planner without disjunction"
+            ) from None
         if len(clauses) == 1:
             goal = conj(*clauses[0]) if clauses[0] else S.And(())
         else:

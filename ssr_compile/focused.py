@@ -1,0 +1,471 @@
+"""The Focused algorithm with deferred stream evaluation (paper §IV, §VII; PDDLStream [11]).
+
+Loop: compile the optimistic problem at the current level; plan with the backend; from the
+plan, extract the stream plan (the optimistic stream results its preimage needs, back-chained
+through their inputs), ordered so that cheap and likely-to-fail instances come first; evaluate
+it, binding optimistic objects to real values and adding certified facts.  A plan whose facts
+are all real is a solution.  No plan at a level raises the level.
+
+Each stream instance is evaluated at most once per level: afterwards it is left out of the
+optimistic instantiation until the level rises (so the planner does not keep asking for new
+samples of the same instance), and a failed test is never retried (tests are deterministic).
+
+Deferred evaluation (§VII): with ``defer=True``, results of deferrable streams whose outputs are
+first needed after the first action are not evaluated; the returned plan keeps them
+optimistic (marked), and the next replanning call evaluates them if they are still needed.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import sys
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from . import syntax as S
+from .compile.instantiate import Instance, Result
+from .compile.pipeline import compile_problem
+from .errors import SSRError, StreamError
+from .preimage import plan_preimage, stream_plan
+from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
+
+SOLVED = "solved"
+
+
+@dataclass
+class StreamStats:
+    calls: int = 0
+    successes: int = 0
+    failures: int = 0
+    time: float = 0.0
+
+
+@dataclass
+class Statistics:
+    iterations: int = 0
+    levels: list[int] = field(default_factory=list)
+    planner_calls: int = 0
+    planner_time: float = 0.0
+    stream_time: float = 0.0
+    total_time: float = 0.0
+    streams: dict[str, StreamStats] = field(default_factory=dict)
+
+    def stream(self, name: str) -> StreamStats:
+        return self.streams.setdefault(name, StreamStats())
+
+    def as_dict(self) -> dict:
+        return {
+            "iterations": self.iterations,
+            "levels": self.levels,
+            "planner_calls": self.planner_calls,
+            "planner_time": round(self.planner_time, 4),
+            "stream_time": round(self.stream_time, 4),
+            "total_time": round(self.total_time, 4),
+            "streams": {
+                k: vars(v) | {"time": round(v.time, 4)} for k, v in sorted(self.streams.items())
+            },
+        }
+
+
+@dataclass
+class Step:
+    """One action of a solution: object names, their Python values, deferred arguments."""
+
+    name: str
+    args: tuple[str, ...]
+    values: tuple[Any, ...]
+    deferred: tuple[str, ...] = ()  # arguments still optimistic (their streams deferred)
+
+    def __str__(self) -> str:
+        return "(" + " ".join([self.name, *self.args]) + ")"
+
+
+@dataclass
+class Solution:
+    status: str  # "solved", "unsolvable" (no plan within the level / cost bound), "timeout"
+    plan: list[Step] | None
+    cost: float | None
+    certificate: list[S.Atom]
+    stats: Statistics
+    deferred: list[Result] = field(default_factory=list)
+    evaluated: list[Result] = field(default_factory=list)
+    values: ValueTable | None = None
+    message: str = ""
+
+    @property
+    def solved(self) -> bool:
+        return self.status == SOLVED
+
+
+class _Evaluation:
+    """Stream state that persists across iterations: generators, results, values."""
+
+    def __init__(
+        self, streams: S.StreamFile, module: StreamsModule, values: ValueTable, stats: Statistics
+    ):
+        self.decl = {s.name: s for s in streams.streams}
+        self.functions = {f.name: f for f in streams.functions}
+        self.module = module
+        self.values = values
+        self.stats = stats
+        self.generators: dict[Instance, Generator] = {}
+        self.results: list[Result] = []
+        self.exhausted: set[Instance] = set()
+        self.tried: set[Instance] = set()  # evaluated at this level
+        self.real_functions: dict[S.FuncTerm, float] = {}
+
+    def evaluate(self, res: Result, binding: dict[str, str]) -> bool:
+        """Evaluate one optimistic result under ``binding`` (optimistic -> real names)."""
+        inputs = tuple(binding.get(x, x) for x in res.instance.inputs)
+        inst = Instance(res.instance.stream, inputs, res.instance.kind)
+        fn = self.module.streams[inst.stream]
+        args = tuple(self.values.value(x) for x in inputs)
+        stats = self.stats.stream(inst.stream)
+        start = time.perf_counter()
+        stats.calls += 1
+        try:
+            if inst.kind == "function":
+                value = call_function(fn, args, inst.stream)
+                term = S.FuncTerm(inst.stream, tuple(S.Const(x) for x in inputs))
+                self.real_functions[term] = math.inf if value is None else value
+                ok = value is not None
+                self.tried.add(inst)
+                return ok
+            decl = self.decl[inst.stream]
+            if inst.kind == "test":
+                ok = call_test(fn, args, inst.stream)
+                self.exhausted.add(inst)  # deterministic: never retried
+                if ok:
+                    mapping = {p.name: v for p, v in zip(decl.inputs, inputs)}
+                    self.results.append(_real_result(inst, (), decl, mapping, res.level))
+                return ok
+            gen = self.generators.get(inst)
+            if gen is None:
+                kind = self.module.info_for(inst.stream).kind or "generator"
+                gen = self.generators[inst] = Generator(fn, args, kind, inst.stream)
+            self.tried.add(inst)
+            out = gen.next()
+            if gen.exhausted:
+                self.exhausted.add(inst)
+            if out is None:
+                return False
+            if len(out) != len(decl.outputs):
+                raise StreamError(
+                    f"stream '{inst.stream}' produced {len(out)} outputs, its declaration has {len(decl.outputs)}"
+                )
+            names = tuple(self.values.name_for(v, p.name) for v, p in zip(out, decl.outputs))
+            mapping = {p.name: v for p, v in zip(decl.inputs, inputs)}
+            mapping.update({p.name: n for p, n in zip(decl.outputs, names)})
+            self.results.append(_real_result(inst, names, decl, mapping, res.level))
+            for opt, real in zip(res.outputs, names):
+                binding[opt] = real
+            return True
+        finally:
+            elapsed = time.perf_counter() - start
+            stats.time += elapsed
+            self.stats.stream_time += elapsed
+
+    def record(self, ok: bool, name: str) -> None:
+        stats = self.stats.stream(name)
+        if ok:
+            stats.successes += 1
+        else:
+            stats.failures += 1
+
+
+def _real_result(
+    inst: Instance, outputs, decl: S.Stream, mapping: dict[str, str], level: int
+) -> Result:
+    certified = []
+    for a in S.conjuncts(decl.certified):
+        if isinstance(a, S.Atom):
+            certified.append(
+                S.Atom(a.pred, tuple(S.Const(mapping.get(t.name, t.name)) for t in a.args))
+            )
+    domain = []
+    for a in S.conjuncts(decl.domain):
+        if isinstance(a, S.Atom):
+            domain.append(
+                S.Atom(a.pred, tuple(S.Const(mapping.get(t.name, t.name)) for t in a.args))
+            )
+    return Result(inst, tuple(outputs), tuple(certified), tuple(domain), level, optimistic=False)
+
+
+def order_stream_plan(
+    results: list[Result], info: Callable[[str], Any], producers: dict[int, list[int]]
+) -> list[Result]:
+    """Producers before consumers; among the ready ones, cheap and likely-to-fail first.
+
+    The key is the expected cost of finding out that the plan fails, ``cost / (1 - p)``
+    (Smith's rule for ordering tests), with level and position as tie-breakers.
+    """
+    position = {id(r): i for i, r in enumerate(results)}
+    waiting = {id(r): set(producers.get(id(r), ())) & set(position) for r in results}
+    consumers: dict[int, list[int]] = {}
+    for r in results:
+        for p in waiting[id(r)]:
+            consumers.setdefault(p, []).append(id(r))
+    by_id = {id(r): r for r in results}
+
+    def key(r: Result):
+        i = info(r.instance.stream)
+        p = min(max(getattr(i, "p_success", 1.0), 0.0), 1.0)
+        cost = getattr(i, "cost", 1.0)
+        score = cost / (1.0 - p) if p < 1.0 else math.inf
+        return (score, r.level, position[id(r)])
+
+    heap = [(key(r), id(r)) for r in results if not waiting[id(r)]]
+    heapq.heapify(heap)
+    out: list[Result] = []
+    while heap:
+        _, rid = heapq.heappop(heap)
+        out.append(by_id[rid])
+        for c in consumers.get(rid, ()):
+            waiting[c].discard(rid)
+            if not waiting[c]:
+                heapq.heappush(heap, (key(by_id[c]), c))
+    return out
+
+
+def solve(
+    domain: S.Domain,
+    streams: S.StreamFile,
+    problem: S.Problem,
+    module: StreamsModule,
+    *,
+    planner: str | Any = "fd",
+    time_limit: float = 60.0,
+    max_cost: float = math.inf,
+    defer: bool = False,
+    initial_level: int = 1,
+    max_level: int = 8,
+    plan_tail: Sequence[tuple[str, Sequence[str]]] | None = None,
+    is_constant: Callable[[str], bool] | None = None,
+    evaluated: Iterable[Result] = (),
+    values: ValueTable | None = None,
+    progress: Callable[[str], None] | None = None,
+    unit_cost: bool = False,
+) -> Solution:
+    """Solve a PDDLStream problem with the Focused algorithm (see the module docstring).
+
+    ``evaluated`` are real results kept from earlier calls (replanning, Algorithm 1);
+    ``plan_tail``/``is_constant`` constrain the plan's structure (Algorithm 2).
+    Returns a :class:`Solution` with status "solved", "unsolvable" or "timeout".
+    """
+    from .planners import get_planner
+
+    start = time.monotonic()
+    deadline = start + time_limit
+    backend = get_planner(planner) if isinstance(planner, str) else planner
+    module.check_against(streams)
+    stats = Statistics()
+    taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
+    if values is None:
+        values = ValueTable(module.values, taken)
+    ev = _Evaluation(streams, module, values, stats)
+    ev.results.extend(evaluated)
+    say = progress or (lambda msg: None)
+    optimistic_values = {
+        f.name: module.info_for(f.name).optimistic_value
+        for f in streams.functions
+        if module.info_for(f.name).optimistic_value is not None
+    }
+    level = max(initial_level, 0)
+    best_failure = "no plan"
+
+    def finish(status, plan=None, cost=None, certificate=(), deferred=(), message=""):
+        stats.total_time = time.monotonic() - start
+        return Solution(
+            status,
+            plan,
+            cost,
+            list(certificate),
+            stats,
+            list(deferred),
+            list(ev.results),
+            values,
+            message,
+        )
+
+    while True:
+        if time.monotonic() >= deadline:
+            return finish("timeout", message=f"time limit of {time_limit:g} s reached")
+        stats.iterations += 1
+        stats.levels.append(level)
+        compiled = compile_problem(
+            domain,
+            streams,
+            problem,
+            caps=backend.capabilities,
+            level=level,
+            evaluated=ev.results,
+            disabled=ev.tried,
+            exhausted=ev.exhausted,
+            function_values=optimistic_values,
+            real_function_values=ev.real_functions,
+            plan_tail=plan_tail,
+            is_constant=is_constant,
+            unit_cost=unit_cost,
+        )
+        remaining = deadline - time.monotonic()
+        bound = None if math.isinf(max_cost) else max_cost * compiled.scale
+        result = backend.solve(
+            compiled.domain, compiled.problem, time_limit=max(remaining, 0.01), cost_bound=bound
+        )
+        stats.planner_calls += 1
+        stats.planner_time += result.time
+        say(
+            f"iteration {stats.iterations}: level {level}, planner {result.status} in {result.time:.3f} s"
+        )
+        if result.status == "error":
+            raise SSRError(f"planner {backend.name} failed: {result.message}")
+        if result.status == "timeout":
+            return finish("timeout", message=f"the planner ran out of time at level {level}")
+        if result.status != "solved":
+            if result.message:
+                best_failure = result.message
+            if level >= max_level:
+                why = "under the cost bound " if bound is not None else ""
+                return finish(
+                    "unsolvable", message=f"no plan {why}up to level {max_level} ({best_failure})"
+                )
+            level += 1
+            ev.tried.clear()  # failed instances may be retried at the higher level
+            continue
+        plan = compiled.map_plan(result.actions or [])
+        pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
+        needed = stream_plan(compiled.instantiation, pre, plan) if compiled.instantiation else []
+        cost = (result.cost or 0.0) / compiled.scale
+        if not needed:
+            return finish(
+                SOLVED, _steps(plan, values, set()), cost, sorted(pre.static_facts, key=str)
+            )
+        now, later = _split_deferred(needed, pre, plan, compiled.instantiation, module, defer)
+        if not now:
+            deferred_objs = {o for r in later for o in r.outputs}
+            return finish(
+                SOLVED,
+                _steps(plan, values, deferred_objs),
+                cost,
+                sorted(pre.static_facts, key=str),
+                deferred=later,
+            )
+        producers = _producers(now, compiled.instantiation)
+        ordered = order_stream_plan(now, module.info_for, producers)
+        say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
+        binding: dict[str, Any] = {}
+        failed: set[str] = set()
+        for res in ordered:
+            if time.monotonic() >= deadline:
+                return finish(
+                    "timeout",
+                    message=f"time limit of {time_limit:g} s reached while evaluating streams",
+                )
+            if any(x in failed for x in res.instance.inputs):
+                failed.update(res.outputs)
+                continue
+            ok = ev.evaluate(res, binding)
+            ev.record(ok, res.instance.stream)
+            if not ok:
+                failed.update(res.outputs)
+                say(f"  {res.instance} failed")
+
+
+def _split_deferred(needed, pre, plan, inst, module, defer: bool):
+    """Which results to evaluate now, and which to defer (paper §VII)."""
+    if not defer or not plan:
+        return list(needed), []
+    first_args = set(plan[0][1])
+    first_facts = pre.per_step[0] if pre.per_step else set()
+    first_costs = pre.per_step_costs[0] if pre.per_step_costs else set()
+    must = set()
+    for r in needed:
+        deferrable = module.info_for(r.instance.stream).deferrable
+        uses_now = (
+            bool(set(r.outputs) & first_args)
+            or any(f in first_facts for f in r.certified)
+            or (
+                r.instance.kind == "function"
+                and S.FuncTerm(r.instance.stream, tuple(S.Const(a) for a in r.instance.inputs))
+                in first_costs
+            )
+        )
+        if uses_now or not deferrable:
+            must.add(id(r))
+    # Everything a must-result needs (its producers) must be evaluated too.
+    producers = _producers(needed, inst)
+    stack = list(must)
+    while stack:
+        rid = stack.pop()
+        for p in producers.get(rid, ()):
+            if p not in must:
+                must.add(p)
+                stack.append(p)
+    now = [r for r in needed if id(r) in must]
+    later = [r for r in needed if id(r) not in must]
+    return now, later
+
+
+def _producers(results: list[Result], inst) -> dict[int, list[int]]:
+    ids = {id(r) for r in results}
+    out: dict[int, list[int]] = {}
+    for r in results:
+        deps = []
+        for x in r.instance.inputs:
+            p = inst.objects.get(x)
+            if p is not None and id(p) in ids:
+                deps.append(id(p))
+        for fact in r.domain:
+            for p in inst.facts.get(fact, ())[:1]:
+                if id(p) in ids:
+                    deps.append(id(p))
+        out[id(r)] = deps
+    return out
+
+
+def _steps(plan, values: ValueTable, deferred_objects: set[str]) -> list[Step]:
+    steps = []
+    for name, args in plan:
+        vals = tuple(None if a in deferred_objects else values.value(a) for a in args)
+        steps.append(Step(name, tuple(args), vals, tuple(a for a in args if a in deferred_objects)))
+    return steps
+
+
+def print_solution(solution: Solution, out=sys.stdout) -> None:
+    """A human-readable report: plan with values, cost, statistics."""
+    st = solution.stats
+    if solution.plan is not None:
+        print(f"plan ({len(solution.plan)} actions, cost {solution.cost:g}):", file=out)
+        for i, step in enumerate(solution.plan, 1):
+            vals = ", ".join(
+                f"{a}={_short(v)}"
+                for a, v in zip(step.args, step.values)
+                if v is not None and v != a
+            )
+            mark = f"  [deferred: {' '.join(step.deferred)}]" if step.deferred else ""
+            print(f"  {i:2d}. {step}{mark}", file=out)
+            if vals:
+                print(f"      {vals}", file=out)
+    else:
+        print(f"no plan: {solution.message}", file=out)
+    print(
+        f"iterations {st.iterations}, levels {st.levels[0] if st.levels else 0}..{max(st.levels, default=0)}, "
+        f"planner calls {st.planner_calls} ({st.planner_time:.3f} s), streams {st.stream_time:.3f} s, "
+        f"total {st.total_time:.3f} s",
+        file=out,
+    )
+    for name, s in sorted(st.streams.items()):
+        print(
+            f"  {name:24s} calls {s.calls:4d}  ok {s.successes:4d}  failed {s.failures:4d}  {s.time:8.4f} s",
+            file=out,
+        )
+
+
+def _short(v: Any) -> str:
+    text = repr(v)
+    if isinstance(v, tuple) and all(isinstance(x, float) for x in v):
+        text = "(" + ", ".join(f"{x:.3g}" for x in v) + ")"
+    return text if len(text) <= 60 else text[:57] + "..."
