@@ -31,7 +31,7 @@ class SSRError(Exception):
 
     @property
     def location(self) -> str:
-        parts = [self.file or "<input>"]
+        parts = [self.file or "ssr-compile"]
         if self.line is not None:
             parts.append(str(self.line))
             if self.col is not None:

@@ -86,7 +86,9 @@ def lower(
         for a in domain.actions:
             if has(a.effect, S.When):
                 raise UnsupportedError(
-                    f"action '{a.name}' has conditional effects, which this planner does not support"
+                    f"action '{a.name}' has conditional effects, which this planner does not support",
+                    line=a.span.line if a.span else None,
+                    col=a.span.col if a.span else None,
                 )
     domain, problem, scale = compile_costs(
         domain,
@@ -245,7 +247,9 @@ def split_disjunctions(domain: S.Domain, problem: S.Problem):
         except TooLarge:
             raise UnsupportedError(
                 f"action '{a.name}': its precondition has too many disjuncts to split for a "
-                "planner without disjunction; use a planner that supports it (such as fd)"
+                "planner without disjunction; use a planner that supports it (such as fd)",
+                line=a.span.line if a.span else None,
+                col=a.span.col if a.span else None,
             ) from None
         if len(clauses) == 1:
             actions.append(replace(a, precondition=conj(*clauses[0]) if clauses[0] else S.And(())))

@@ -1,0 +1,322 @@
+"""``ssr-compile compile``, ``plan`` and ``planners``: PDDLStream -> plain cost-PDDL -> planners."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from . import syntax as S
+from .cli import load_files, register, write_atomically
+from .errors import SSRError
+
+
+def _add_inputs(p: argparse.ArgumentParser, problem_optional: bool) -> None:
+    p.add_argument("domain", metavar="DOMAIN", help="domain file")
+    p.add_argument("stream", metavar="STREAM", help="stream file (PDDLStream)")
+    p.add_argument(
+        "problem", metavar="PROBLEM", nargs="?" if problem_optional else None, help="problem file"
+    )
+    p.add_argument(
+        "--level",
+        type=int,
+        default=3,
+        metavar="N",
+        help="optimistic instantiation depth: stream instances whose inputs need more than N "
+        "chained instances are not made (default 3)",
+    )
+
+
+def load_inputs(args, warnings: list[str]):
+    """Parse and check DOMAIN STREAM [PROBLEM]; raises the first error."""
+    from .check import check_domain, check_problem, check_streams
+
+    paths = [args.domain, args.stream] + ([args.problem] if getattr(args, "problem", None) else [])
+    loaded = load_files(paths, warnings)
+    (dp, dsrc, domain), (sp, ssrc, streams) = loaded[0], loaded[1]
+    for path, node, want in ((dp, domain, S.Domain), (sp, streams, S.StreamFile)):
+        if not isinstance(node, want):
+            raise SSRError(
+                f"expected a {want.kind} file, found a {node.kind} file", file=path, line=1, col=1
+            )
+    reports = [
+        check_domain(domain, streams=streams, filename=dp, source=dsrc),
+        check_streams(streams, domain, filename=sp, source=ssrc),
+    ]
+    problem = None
+    if len(loaded) > 2:
+        pp, psrc, problem = loaded[2]
+        if not isinstance(problem, S.Problem):
+            raise SSRError(
+                f"expected a problem file, found a {problem.kind} file", file=pp, line=1, col=1
+            )
+        reports.append(check_problem(problem, domain, streams=streams, filename=pp, source=psrc))
+    for r in reports:
+        r.raise_first()
+        warnings.extend(r.warnings)
+    return domain, streams, problem
+
+
+def attach_domain_file(e: SSRError, domain_path: str) -> SSRError:
+    """Errors of the compiler passes point into the domain: name the file and show the line."""
+    if e.file is None and e.line is not None:
+        from .parse import read_source
+
+        e.file = domain_path
+        try:
+            e.source = read_source(domain_path)
+        except SSRError:
+            pass
+    return e
+
+
+def _caps_for(spec: str | None):
+    from .compile.pipeline import FullCapabilities
+
+    if not spec:
+        return FullCapabilities()
+    from .planners import get_planner
+
+    return get_planner(spec).capabilities
+
+
+# ---------------------------------------------------------------- compile
+
+
+def _configure_compile(p: argparse.ArgumentParser) -> None:
+    _add_inputs(p, problem_optional=True)
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="DIR",
+        help="folder for domain.pddl, problem.pddl, objects.json",
+    )
+    p.add_argument(
+        "--for",
+        dest="backend",
+        metavar="BACKEND",
+        help="lower to what this planner supports (e.g. fd, pyperplan, up:fast-downward); "
+        "default: keep everything (axioms, quantifiers, costs)",
+    )
+    p.add_argument(
+        "--unit-cost", action="store_true", help="drop action costs (every action costs 1)"
+    )
+    p.add_argument("--shorthand", action="store_true", help="write the paper's shorthand keywords")
+
+
+def run_compile(args: argparse.Namespace) -> int:
+    try:
+        return _run_compile(args)
+    except SSRError as e:
+        raise attach_domain_file(e, args.domain) from None
+
+
+def _run_compile(args: argparse.Namespace) -> int:
+    from .compile.lower import lower
+    from .compile.pipeline import compile_problem, declare_stream_predicates
+    from .printer import to_text
+
+    warnings: list[str] = []
+    domain, streams, problem = load_inputs(args, warnings)
+    caps = _caps_for(args.backend)
+    out = Path(args.output)
+    files: dict[str, str] = {}
+    if problem is None:
+        # Domain level: derived predicates and cost functions, no stream instances.
+        dom = declare_stream_predicates(domain, streams)
+        empty = S.Problem("domain-level", dom.name, init=(), goal=S.And(()))
+        lowered = lower(
+            dom,
+            empty,
+            caps,
+            cost_functions={f.name for f in streams.functions},
+            unit_cost=args.unit_cost,
+        )
+        files["domain.pddl"] = to_text(lowered.domain, shorthand=args.shorthand)
+        note = "compiled the domain only (derived predicates, costs); give a PROBLEM to instantiate streams"
+        summary = {"level": None, "scale": lowered.scale, "note": note}
+    else:
+        compiled = compile_problem(
+            domain, streams, problem, caps=caps, level=args.level, unit_cost=args.unit_cost
+        )
+        files["domain.pddl"] = to_text(compiled.domain, shorthand=args.shorthand)
+        files["problem.pddl"] = to_text(compiled.problem, shorthand=args.shorthand)
+        inst = compiled.instantiation
+        objects = {
+            name: {"stream": r.instance.stream, "inputs": list(r.instance.inputs), "level": r.level}
+            for name, r in sorted(inst.objects.items())
+        }
+        files["objects.json"] = json.dumps(
+            {
+                "level": args.level,
+                "saturated": inst.saturated,
+                "scale": compiled.scale,
+                "objects": objects,
+                "facts": {
+                    str(f): [str(r.instance) for r in rs]
+                    for f, rs in sorted(inst.facts.items(), key=lambda x: str(x[0]))
+                },
+            },
+            indent=1,
+        )
+        summary = {
+            "level": args.level,
+            "scale": compiled.scale,
+            "instances": len(inst.results),
+            "optimistic objects": len(inst.objects),
+        }
+    for name, text in files.items():
+        write_atomically(out / name, text)
+    for w in warnings:
+        print(w, file=sys.stderr)
+    print(f"wrote {', '.join(str(out / n) for n in files)}")
+    print("; ".join(f"{k}: {v}" for k, v in summary.items() if v is not None))
+    return 0
+
+
+# ---------------------------------------------------------------- plan
+
+
+def _configure_plan(p: argparse.ArgumentParser) -> None:
+    _add_inputs(p, problem_optional=False)
+    p.add_argument(
+        "--planner",
+        default="fd",
+        metavar="NAME",
+        help="planner backend (default fd; see `ssr-compile planners`)",
+    )
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=60.0,
+        metavar="S",
+        help="planner time limit in seconds (default 60)",
+    )
+    p.add_argument("--unit-cost", action="store_true", help="ignore action costs")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    try:
+        return _run_plan(args)
+    except SSRError as e:
+        raise attach_domain_file(e, args.domain) from None
+
+
+def _run_plan(args: argparse.Namespace) -> int:
+    from .compile.pipeline import compile_problem
+    from .planners import get_planner
+    from .preimage import plan_preimage, stream_plan
+
+    warnings: list[str] = []
+    domain, streams, problem = load_inputs(args, warnings)
+    backend = get_planner(args.planner)
+    compiled = compile_problem(
+        domain,
+        streams,
+        problem,
+        caps=backend.capabilities,
+        level=args.level,
+        unit_cost=args.unit_cost,
+    )
+    result = backend.solve(compiled.domain, compiled.problem, time_limit=args.time_limit)
+    for w in warnings:
+        print(w, file=sys.stderr)
+    if result.status == "error":
+        raise SSRError(f"planner {args.planner} failed: {result.message}")
+    report: dict = {
+        "status": result.status,
+        "planner": args.planner,
+        "time": round(result.time, 4),
+        "level": args.level,
+    }
+    if result.solved:
+        plan = compiled.map_plan(result.actions or [])
+        pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
+        needed = stream_plan(compiled.instantiation, pre, plan)
+        report.update(
+            plan=[{"action": n, "args": list(a)} for n, a in plan],
+            cost=(result.cost or 0) / compiled.scale,
+            scale=compiled.scale,
+            stream_plan=[
+                {
+                    "stream": r.instance.stream,
+                    "inputs": list(r.instance.inputs),
+                    "outputs": list(r.outputs),
+                }
+                for r in needed
+            ],
+        )
+    else:
+        report["message"] = result.message
+    if args.json:
+        print(json.dumps(report, indent=1))
+    elif result.solved:
+        print(
+            f"optimistic plan ({len(report['plan'])} actions, cost {report['cost']:g}, planner {args.planner}, {result.time:.3f} s):"
+        )
+        for i, step in enumerate(report["plan"], 1):
+            print(f"  {i:2d}. ({' '.join([step['action'], *step['args']])})")
+        print(f"stream instances it relies on ({len(report['stream_plan'])}):")
+        for r in report["stream_plan"]:
+            outs = f" -> {', '.join(r['outputs'])}" if r["outputs"] else ""
+            print(f"  {r['stream']}({', '.join(r['inputs'])}){outs}")
+    else:
+        print(f"no plan ({result.status}) at level {args.level}: {result.message}")
+    return 0 if result.solved else 1
+
+
+# ---------------------------------------------------------------- planners
+
+
+def _configure_planners(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true", help="print as JSON")
+
+
+def run_planners(args: argparse.Namespace) -> int:
+    from .planners import describe_planners
+
+    rows = describe_planners()
+    if args.json:
+        print(json.dumps(rows, indent=1))
+        return 0
+    features = [
+        "costs",
+        "axioms",
+        "negative_preconditions",
+        "disjunction",
+        "quantifiers",
+        "conditional_effects",
+        "optimal",
+    ]
+    short = ["costs", "axioms", "neg", "or", "quant", "cond-eff", "optimal"]
+    width = max((len(r.get("name", "")) for r in rows), default=4) + 2
+    print("planner".ljust(width) + " ".join(s.ljust(8) for s in short) + " notes")
+    for r in rows:
+        caps = r.get("capabilities") or {}
+        marks = " ".join(("yes" if caps.get(f) else "-").ljust(8) for f in features)
+        note = r.get("description") or r.get("error") or ""
+        print(r.get("name", "?").ljust(width) + marks + " " + note)
+    return 0
+
+
+register(
+    "compile",
+    "compile DOMAIN STREAM [PROBLEM] to plain cost-PDDL (also the bare form: ssr-compile DOMAIN STREAM PROBLEM -o DIR)",
+    _configure_compile,
+    run_compile,
+)
+register(
+    "plan",
+    "compile and plan optimistically; print the plan and the stream instances it relies on",
+    _configure_plan,
+    run_plan,
+)
+register(
+    "planners",
+    "list the installed planner backends and what each supports",
+    _configure_planners,
+    run_planners,
+)
