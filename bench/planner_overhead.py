@@ -1,12 +1,14 @@
 """Per-call time of each planner backend on three small problems (median of N calls).
 
 Prints one row per backend and problem, with the ratio of each backend's median to ``fd``'s
-in the same run.  Usage: ``python bench/planner_overhead.py [--calls 10] [SPEC ...]``.
+in the same run, and the CPU time per call (this process and its children: forked workers,
+planner binaries), which varies less than wall-clock time on a busy machine.  Usage: ``python bench/planner_overhead.py [--calls 10] [SPEC ...]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
 import statistics
 import time
 from pathlib import Path
@@ -25,6 +27,14 @@ def load(domain: str, problem: str):
     return parse_text(d.read_text(), d.name), parse_text(p.read_text(), p.name)
 
 
+def _cpu() -> float:
+    total = 0.0
+    for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN):
+        r = resource.getrusage(who)
+        total += r.ru_utime + r.ru_stime
+    return total
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("specs", nargs="*", default=DEFAULT_SPECS)
@@ -39,23 +49,28 @@ def main() -> None:
         for spec, planner in planners.items():
             first = planner.solve(*task, time_limit=60)  # warm-up, and the status to show
             times = []
+            cpu = _cpu()
             for _ in range(args.calls):
                 start = time.perf_counter()
                 planner.solve(*task, time_limit=60)
                 times.append(time.perf_counter() - start)
+            cpu = (_cpu() - cpu) / args.calls
             medians[spec] = statistics.median(times)
-            rows.append((problem, spec, first.status, medians[spec], min(times)))
+            rows.append((problem, spec, first.status, medians[spec], min(times), cpu))
         for i in range(len(rows) - len(planners), len(rows)):
-            p, s, st, med, lo = rows[i]
-            rows[i] = (p, s, st, med, lo, med / medians["fd"])
+            rows[i] = (*rows[i], rows[i][3] / medians["fd"])
     head = (
-        f"{'problem':<8} {'planner':<22} {'status':<11} {'median ms':>9} {'min ms':>7} {'x fd':>6}"
+        f"{'problem':<8} {'planner':<22} {'status':<11} {'median ms':>9} {'min ms':>7}"
+        f" {'cpu ms':>7} {'x fd':>6}"
     )
     print(f"{args.calls} calls per cell")
     print(head)
     print("-" * len(head))
-    for p, s, st, med, lo, ratio in rows:
-        print(f"{p:<8} {s:<22} {st:<11} {med * 1e3:9.1f} {lo * 1e3:7.1f} {ratio:6.1f}")
+    for p, s, st, med, lo, cpu, ratio in rows:
+        print(
+            f"{p:<8} {s:<22} {st:<11} {med * 1e3:9.1f} {lo * 1e3:7.1f} {cpu * 1e3:7.1f}"
+            f" {ratio:6.1f}"
+        )
 
 
 if __name__ == "__main__":
