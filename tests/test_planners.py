@@ -212,3 +212,23 @@ def test_fd_refuses_fractional_costs_with_a_message():
     problem = parse_text(text, "travel-fractional.pddl")
     result = planner("fd").solve(domain, problem, time_limit=20)
     assert result.status == "error" and "integer costs" in result.message
+
+
+def _nap(seconds):
+    time.sleep(seconds)
+    return seconds
+
+
+def test_forked_worker_killed_on_timeout_and_replaced():
+    from ssr_compile.planners.proc import ForkedWorker
+
+    worker = ForkedWorker(_nap)
+    try:
+        assert worker.call((0.0,), timeout=5) == ("ok", 0.0)
+        first = worker.pid
+        start = time.monotonic()
+        assert worker.call((30,), timeout=0.5) == ("timeout", None)
+        assert time.monotonic() - start < 1.5 and worker.pid is None
+        assert worker.call((0.0,), timeout=5) == ("ok", 0.0) and worker.pid != first
+    finally:
+        worker.close()

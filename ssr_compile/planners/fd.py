@@ -1,8 +1,9 @@
 """``fd``: Fast Downward without unified-planning's PDDL round trip.
 
 One call writes the task as canonical PDDL into a fresh temporary directory, runs Fast
-Downward's Python translator in a forked child (the translator modules are imported once, in
-the parent, so a call pays for a fork rather than an interpreter start), then runs the
+Downward's Python translator in a forked worker process (the translator modules are imported
+once, in the parent, before the fork; the worker is kept between calls, so a call pays neither
+an interpreter start nor a fork; it is killed and re-forked when a call times out), then runs the
 ``downward`` search binary shipped by the ``up_fast_downward`` package as a subprocess in its
 own process group, reading the SAS file.  Both steps share the call's wall-clock limit and are
 killed when it passes.  Supports everything the translator does: negation, disjunction,
@@ -12,6 +13,7 @@ static functions.
 
 from __future__ import annotations
 
+import atexit
 import importlib.util
 import math
 import os
@@ -99,6 +101,11 @@ def _translate(domain_path: str, problem_path: str, sas_path: str) -> dict:
         "axioms": len(sas_task.axioms),
         "conditional_effects": any(c for op in sas_task.operators for *_, c in op.pre_post),
     }
+
+
+# One translator process for all fd planners of this process, forked on first use.
+_TRANSLATOR = proc.ForkedWorker(_translate)
+atexit.register(_TRANSLATOR.close)
 
 
 def _log_tail(path: str, lines: int = 6) -> str:
@@ -191,8 +198,7 @@ class FastDownward:
             Path(paths["domain.pddl"]).write_text(to_text(domain))
             Path(paths["problem.pddl"]).write_text(to_text(problem))
             sas, log = os.path.join(tmp, "output.sas"), os.path.join(tmp, "translate.log")
-            status, info = proc.run_forked(
-                _translate,
+            status, info = _TRANSLATOR.call(
                 (paths["domain.pddl"], paths["problem.pddl"], sas),
                 timeout=clock.remaining(),
                 log_path=log,

@@ -3,7 +3,8 @@
 Two tools: :func:`run_command` runs a planner binary as a subprocess in its own process group
 and kills the whole group when the limit passes; :func:`run_forked` runs a Python function in a
 forked child (its own session, so helpers it spawns die with it) and returns the function's
-value through a pipe.  Forking keeps the modules the parent has already imported (Fast
+value through a pipe; :class:`ForkedWorker` keeps such a child alive between calls.  Forking
+keeps the modules the parent has already imported (Fast
 Downward's translator, unified-planning), which is what makes per-call overhead small.
 """
 
@@ -14,6 +15,8 @@ import pickle
 import select
 import signal
 import subprocess
+import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable
@@ -181,3 +184,134 @@ def run_forked(
         return pickle.loads(b"".join(chunks))
     except Exception as e:  # noqa: BLE001
         return FAILED, f"unreadable worker result: {e}"
+
+
+def _send(fd: int, obj) -> None:
+    data = pickle.dumps(obj)
+    view = memoryview(len(data).to_bytes(8, "little") + data)
+    while view:
+        view = view[os.write(fd, view) :]
+
+
+def _recv_blocking(fd: int):
+    """One length-prefixed message, or ``None`` at end of file."""
+    buf = b""
+    while len(buf) < 8:
+        chunk = os.read(fd, 8 - len(buf))
+        if not chunk:
+            return None
+        buf += chunk
+    size, data = int.from_bytes(buf, "little"), b""
+    while len(data) < size:
+        chunk = os.read(fd, min(size - len(data), 1 << 16))
+        if not chunk:
+            return None
+        data += chunk
+    return pickle.loads(data)
+
+
+class ForkedWorker:
+    """A forked child that runs ``fn`` once per request and stays alive between requests.
+
+    Compared with :func:`run_forked`, the child's copy-on-write memory is paid for once, not
+    per call (for Fast Downward's translator this halves the CPU time of a small call).  A
+    request that exceeds its time limit kills the worker (and everything it started); the next
+    request forks a fresh one.  The worker exits when the parent closes its end of the pipe,
+    including when the parent dies.
+    """
+
+    def __init__(self, fn: Callable[..., Any], *, max_calls: int = 500):
+        self.fn = fn
+        self.max_calls = max_calls  # then a fresh worker, so no state builds up for ever
+        self.pid: int | None = None
+        self._calls = 0
+        self._lock = threading.Lock()
+
+    def _start(self) -> None:
+        req_r, req_w = os.pipe()
+        res_r, res_w = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            try:
+                os.close(req_w)
+                os.close(res_r)
+                os.setsid()
+                self._serve(req_r, res_w)
+            finally:
+                os._exit(0)
+        os.close(req_r)
+        os.close(res_w)
+        self.pid, self._req, self._res = pid, req_w, res_r
+
+    def _serve(self, req: int, res: int) -> None:
+        while True:
+            message = _recv_blocking(req)
+            if message is None:
+                return
+            args, log_path = message
+            out = os.open(log_path or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.dup2(out, 1)
+            os.dup2(out, 2)
+            os.close(out)
+            try:
+                payload = (OK, self.fn(*args))
+            except BaseException as e:  # noqa: BLE001
+                traceback.print_exc()
+                payload = (FAILED, " ".join(f"{type(e).__name__}: {e}".split()))
+            sys.stdout.flush()
+            sys.stderr.flush()
+            _send(res, payload)
+
+    def _stop(self) -> None:
+        if self.pid is None:
+            return
+        _kill_tree(self.pid)
+        os.waitpid(self.pid, 0)
+        os.close(self._req)
+        os.close(self._res)
+        self.pid = None
+
+    def close(self) -> None:
+        """Stop the worker and reap it (registered with :mod:`atexit` by its users, so that no
+        finished worker lingers as a zombie)."""
+        with self._lock:
+            self._stop()
+
+    def call(self, args: tuple, *, timeout: float, log_path: str | None = None) -> tuple[str, Any]:
+        """Like :func:`run_forked`: ``("ok", value)``, ``("timeout", None)`` or
+        ``("error", message)``."""
+        if not can_fork():
+            return run_forked(self.fn, args, timeout=timeout, log_path=log_path)
+        with self._lock:
+            if self.pid is not None and os.waitpid(self.pid, os.WNOHANG) != (0, 0):
+                self.pid = None  # died since the last call (already reaped by the check)
+            if self.pid is not None and self._calls >= self.max_calls:
+                self._stop()
+            if self.pid is None:
+                self._start()
+                self._calls = 0
+            self._calls += 1
+            deadline = time.monotonic() + max(timeout, 0.0)
+            try:
+                _send(self._req, (args, log_path))
+                buf = b""
+                size = None
+                while size is None or len(buf) < 8 + size:
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        self._stop()
+                        return TIMED_OUT, None
+                    ready, _, _ = select.select([self._res], [], [], left)
+                    if not ready:
+                        continue
+                    chunk = os.read(self._res, 1 << 16)
+                    if not chunk:
+                        self._stop()
+                        return FAILED, "worker process died"
+                    buf += chunk
+                    if size is None and len(buf) >= 8:
+                        size = int.from_bytes(buf[:8], "little")
+                return pickle.loads(buf[8:])
+            except BaseException:
+                self._stop()
+                raise
