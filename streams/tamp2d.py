@@ -13,6 +13,12 @@ a name in the solver's value table (it names equal values alike, keyed by type n
 * :class:`Conf` ``(x, y)``: the gripper's position;
 * :class:`Traj` ``(path,)``: waypoints (confs) up to :data:`SAFE_HEIGHT`, across and down.
 
+The configuration of a grasp is the gripper :data:`CLEARANCE` above where it holds the block:
+``pick`` and ``place`` include the vertical stroke down and back, so a held block's bottom is
+at least :data:`CLEARANCE` above the table whenever the gripper moves, higher than every
+block (CLEARANCE > 2 max height + max grasp - min height - min grasp).  Motions thus never
+hit a block, whatever they carry; ``place``'s ``(not (Unsafe ...))`` guards the stroke down.
+
 Streams (``STREAMS``; kinds and costs in ``STREAM_INFO``):
 
 * ``sample-placement`` — generator, endless and lazy, seeded from its inputs: uniform poses of
@@ -80,6 +86,7 @@ SEED = 0  # the base seed of every sampler (each stream instance mixes in its in
 SAFE_HEIGHT = 4.0  # the gripper travels across at this height, above every block
 REACH = (-6.0, 14.0)  # the gripper's reachable x interval
 GRASPS = (0.2, 0.4)  # vertical offsets above a block's top
+CLEARANCE = 1.6  # the stroke of pick and place (see the module docstring)
 TOL = 1e-6
 
 VALUES: dict[str, Any] = {
@@ -96,6 +103,12 @@ VALUES: dict[str, Any] = {
 
 
 # ---------------------------------------------------------------- streams
+
+
+def seed(n: int) -> None:
+    """Set the base seed of the samplers (``ssr-compile solve --seed N`` calls this)."""
+    global SEED
+    SEED = int(n)
 
 
 def _rng(*inputs: Any) -> np.random.Generator:
@@ -122,7 +135,8 @@ def sample_grasp(block: Block) -> Iterator[tuple[Grasp] | None]:
 
 
 def kinematics(block: Block, pose: Pose, grasp: Grasp) -> Conf:
-    return Conf(pose.x, round(block.height + grasp.dy, 6))
+    """Where the gripper waits above ``block`` at ``pose`` before (after) the stroke down."""
+    return Conf(pose.x, round(block.height + grasp.dy + CLEARANCE, 6))
 
 
 def ik(block: Block, pose: Pose, grasp: Grasp) -> tuple[Conf] | None:

@@ -208,6 +208,11 @@ def test_streams_behave_as_their_info_says():
     assert all(rgoal.lo + 0.5 <= p.x <= rgoal.hi - 0.5 for p in poses)
     again = T.sample_placement(b0, rgoal)
     assert [next(again)[0] for _ in range(50)] == poses
+    try:
+        T.seed(1)
+        assert next(T.sample_placement(b0, rgoal))[0] != poses[0]
+    finally:
+        T.seed(0)
     # ... and every pose of b0 in the goal region overlaps b1 at p1 (problem-blocked).
     assert not any(T.test_cfree(b0, p, b1, T.VALUES["p1"]) for p in poses)
     # ... while b1's placements on the table sometimes overlap b0 at p0, sometimes not.
@@ -222,7 +227,7 @@ def test_streams_behave_as_their_info_says():
     assert gen.next() is None and gen.exhausted
     # ik: a function stream, None out of reach.
     assert module.info_for("ik").kind == "function"
-    assert T.ik(b0, T.Pose(1.0), T.Grasp(0.2)) == (T.Conf(1.0, 1.2),)
+    assert T.ik(b0, T.Pose(1.0), T.Grasp(0.2)) == (T.Conf(1.0, 1.0 + 0.2 + T.CLEARANCE),)
     assert T.ik(b0, T.Pose(20.0), T.Grasp(0.2)) is None
     # motion: deferrable, starts and ends at its inputs; distance is its length, >= optimistic.
     info = module.info_for("motion")
@@ -244,16 +249,17 @@ def test_streams_behave_as_their_info_says():
 
 def _real_plan_blocked(**overrides):
     """A real plan for problem-blocked: b1 to the table (clear of b0), then b0 to the goal."""
+    b0, b1, g = T.VALUES["b0"], T.VALUES["b1"], T.Grasp(0.2)
     values = {
-        "g": T.Grasp(0.2),
+        "g": g,
         "pa": T.Pose(-3.0),
         "pg": T.Pose(4.7),
-        "qb1": T.Conf(4.7, 1.0),
-        "qa": T.Conf(-3.0, 1.0),
-        "qb0": T.Conf(0.0, 1.2),
-        "qg": T.Conf(4.7, 1.2),
-        **overrides,
+        "qb1": T.kinematics(b1, T.Pose(4.7), g),
+        "qa": T.kinematics(b1, T.Pose(-3.0), g),
+        "qb0": T.kinematics(b0, T.Pose(0.0), g),
+        "qg": T.kinematics(b0, T.Pose(4.7), g),
     }
+    values.update(overrides)
 
     def move(a, b):
         name = f"t-{a}-{b}"
@@ -295,11 +301,11 @@ def test_check_plan_accepts_a_real_plan_and_returns_its_cost():
         ({}, slice(4, None), "gripper is at"),  # b0 first: the gripper is not at qa
         ({}, [0, 1, 2, 3, 4, 6, 7], "gripper does not hold b0"),  # no pick of b0
         ({}, slice(None, -1), "goal does not hold"),  # b0 never placed
-        ({"pa": T.Pose(0.5), "qa": T.Conf(0.5, 1.0)}, None, "path hits a block"),  # onto b0
-        ({"pg": T.Pose(7.0), "qg": T.Conf(7.0, 1.2)}, None, "goal does not hold"),
-        ({"qb0": T.Conf(0.0, 1.5)}, None, "does not hold b0"),  # wrong kinematics
+        ({"pa": T.Pose(0.5), "qa": T.Conf(0.5, 2.6)}, None, "overlaps b0"),
+        ({"pg": T.Pose(7.0), "qg": T.Conf(7.0, 2.8)}, None, "goal does not hold"),
+        ({"qb0": T.Conf(0.0, 2.5)}, None, "does not hold b0"),  # wrong kinematics
         (
-            {"t-q0-qb1": T.Traj((T.Conf(-2, 3), T.Conf(0, 0.5), T.Conf(4.7, 1.0)))},
+            {"t-q0-qb1": T.Traj((T.Conf(-2, 3), T.Conf(0, 0.5), T.Conf(4.7, 2.6)))},
             None,
             "path hits a block",
         ),
@@ -324,5 +330,63 @@ def test_check_plan_placing_b0_into_the_occupied_goal_region_fails():
     plan, values = _real_plan_blocked()
     direct = plan[4:]
     direct[0] = ("move", ("q0", "t", "qb0"))
-    with pytest.raises(T.PlanError, match="path hits a block"):
+    with pytest.raises(T.PlanError, match="overlaps b1"):
         T.check_plan(domain, problem, values, direct)
+
+
+# ---------------------------------------------------------------- (d) the Focused solver
+
+
+def _solve(folder: Path, name: str, **options):
+    focused = pytest.importorskip("ssr_compile.focused")
+    domain, streams, problem = load(folder, name)
+    solution = focused.solve(domain, streams, problem, from_module(T), time_limit=30, **options)
+    assert solution.solved, solution.message
+    plan = [(step.name, step.args) for step in solution.plan]
+    cost = T.check_plan(domain, problem, solution.values.value, plan)
+    return solution, plan, cost
+
+
+def _final_pose(solution, plan, block: str) -> T.Pose:
+    place = [args for name, args in plan if name == "place" and args[0] == block][-1]
+    return solution.values.value(place[1])
+
+
+def test_solver_moves_one_block_into_the_goal_region():
+    solution, plan, cost = _solve(TAMP2D, "problem.pddl", planner="fd:opt")
+    assert [name for name, _ in plan if name != "move"] == ["pick", "place"]
+    rgoal = T.VALUES["rgoal"]
+    assert rgoal.lo <= _final_pose(solution, plan, "b0").x <= rgoal.hi
+    assert solution.cost == pytest.approx(cost, rel=0.01, abs=0.01)
+    # sample-grasp failed at first and the solver came back to it.
+    grasp = solution.stats.streams["sample-grasp"]
+    assert grasp.failures >= 1 and grasp.successes >= 1
+
+
+def test_solver_moves_the_blocker_first():
+    solution, plan, _ = _solve(TAMP2D, "problem-blocked.pddl", planner="fd:opt")
+    picks = [args[0] for name, args in plan if name == "pick"]
+    assert picks == ["b1", "b0"]
+    rtable = T.VALUES["rtable"]
+    assert rtable.lo <= _final_pose(solution, plan, "b1").x <= rtable.hi
+    # test-cfree failed (b0 in the goal region next to b1 at p1) and the solver recovered.
+    assert solution.stats.streams["test-cfree"].failures >= 1
+
+
+def test_solver_chooses_the_cheaper_route():
+    solution, plan, cost = _solve(ROUTES, "problem.pddl", planner="fd:opt")
+    rnear = T.VALUES["rnear"]
+    assert rnear.lo <= _final_pose(solution, plan, "b0").x <= rnear.hi
+    # The far route would cost at least the extra travel to the far region.
+    far = T.VALUES["rfar"]
+    assert cost < 2 * (far.lo - rnear.hi)
+
+
+def test_solver_with_deferred_motions_gives_a_plan_the_checker_accepts():
+    solution, plan, _ = _solve(TAMP2D, "problem.pddl", planner="fd:opt", defer=True)
+    deferred = {x for step in solution.plan for x in step.deferred}
+    # The first action is real; a later motion waits (paper §VII).
+    assert deferred and not solution.plan[0].deferred
+    # Only trajectories may be left optimistic.
+    assert all(solution.values.value(x) == x for x in deferred)
+    assert all(name == "move" for name, args in plan if set(args) & deferred)
