@@ -2,7 +2,9 @@
 
 Prints one row per backend and problem, with the ratio of each backend's median to ``fd``'s
 in the same run, and the CPU time per call (this process and its children: forked workers,
-planner binaries), which varies less than wall-clock time on a busy machine.  Usage: ``python bench/planner_overhead.py [--calls 10] [SPEC ...]``.
+planner binaries), which varies less than wall-clock time on a busy machine.  The CPU time of
+``fd``'s persistent translator worker is not in that column (a child's CPU time is counted
+only once it has been reaped), so read ``fd``'s CPU as the search binary's and this process's.  Usage: ``python bench/planner_overhead.py [--calls 10] [SPEC ...]``.
 """
 
 from __future__ import annotations
