@@ -116,11 +116,30 @@ class _Evaluation:
         self.exhausted: set[Instance] = set()
         self.tried: set[Instance] = set()  # evaluated at this level
         self.real_functions: dict[S.FuncTerm, float] = {}
+        # instance (real inputs) -> last outcome: output names, True (test passed) or
+        # False/None (failed)
+        self.outcomes: dict[Instance, Any] = {}
+        self.called = False  # did the last evaluate() call the stream (or reuse an outcome)?
 
     def evaluate(self, res: Result, binding: dict[str, str]) -> bool:
         """Evaluate one optimistic result under ``binding`` (optimistic -> real names)."""
         inputs = tuple(binding.get(x, x) for x in res.instance.inputs)
         inst = Instance(res.instance.stream, inputs, res.instance.kind)
+        # Optimistic inputs bound to real values may coincide with an instance evaluated
+        # before: reuse its outcome instead of asking an exhausted generator (or a
+        # deterministic test, or a function) again and calling the plan a failure.
+        self.called = False
+        if inst in self.outcomes:
+            known = self.outcomes[inst]
+            if known is None or inst.kind == "function":
+                return known is not None and known is not False
+            if known is False:
+                return False
+            if inst.kind != "test" and inst in self.exhausted:
+                for opt, real in zip(res.outputs, known):
+                    binding[opt] = real
+                return True
+        self.called = True
         fn = self.module.streams[inst.stream]
         args = tuple(self.values.value(x) for x in inputs)
         stats = self.stats.stream(inst.stream)
@@ -133,11 +152,13 @@ class _Evaluation:
                 self.real_functions[term] = math.inf if value is None else value
                 ok = value is not None
                 self.tried.add(inst)
+                self.outcomes[inst] = ok
                 return ok
             decl = self.decl[inst.stream]
             if inst.kind == "test":
                 ok = call_test(fn, args, inst.stream)
                 self.exhausted.add(inst)  # deterministic: never retried
+                self.outcomes[inst] = ok
                 if ok:
                     mapping = {p.name: v for p, v in zip(decl.inputs, inputs)}
                     self.results.append(_real_result(inst, (), decl, mapping, res.level))
@@ -151,6 +172,8 @@ class _Evaluation:
             if gen.exhausted:
                 self.exhausted.add(inst)
             if out is None:
+                if inst not in self.outcomes:
+                    self.outcomes[inst] = False
                 return False
             if len(out) != len(decl.outputs):
                 raise StreamError(
@@ -160,6 +183,7 @@ class _Evaluation:
             mapping = {p.name: v for p, v in zip(decl.inputs, inputs)}
             mapping.update({p.name: n for p, n in zip(decl.outputs, names)})
             self.results.append(_real_result(inst, names, decl, mapping, res.level))
+            self.outcomes[inst] = names
             for opt, real in zip(res.outputs, names):
                 binding[opt] = real
             return True
@@ -169,6 +193,9 @@ class _Evaluation:
             self.stats.stream_time += elapsed
 
     def record(self, ok: bool, name: str) -> None:
+        """Count the outcome of the last :meth:`evaluate` if it really called the stream."""
+        if not self.called:
+            return
         stats = self.stats.stream(name)
         if ok:
             stats.successes += 1

@@ -109,8 +109,13 @@ def compile_away(domain: S.Domain, problem: S.Problem | None = None):
         )
         for a in domain.actions
     )
+    requirements = domain.requirements
+    if requirements is not None:
+        # Readers such as unified-planning's refuse the flag once no axiom is left.
+        requirements = tuple(r for r in requirements if r != ":derived-predicates")
     new_domain = replace(
         domain,
+        requirements=requirements,
         axioms=(),
         actions=actions,
         predicates=tuple(p for p in domain.predicates if p.name not in derived),

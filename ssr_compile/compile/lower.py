@@ -10,7 +10,9 @@ domain and problem to fit, and returns a map from a plan of its output back to i
   DNF (``a--1``, ``a--2``...); a disjunctive goal gets one ``ssr-goal--k`` action per disjunct;
 * negative preconditions -> complement predicates ``not-p`` kept in step by the effects, and
   equality with constants substituted into the action (its parameter disappears);
-* costs -> unit costs (else integer costs, scaled and rounded up, by :mod:`.costs`).
+* costs -> unit costs (else integer costs, scaled and rounded up, by :mod:`.costs`);
+* names -> renamed where a reader would refuse them (an action named like a predicate, ``@x``),
+  mapped back by :meth:`Lowered.map_plan`.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from dataclasses import dataclass, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
+from ..planners.rename import Renaming, rename_task
 from .costs import compile_costs
 from .derived import compile_away, normalise_axiom_bodies
 from .formulas import TooLarge, conj, dnf, has, map_atoms, nnf, substitute
@@ -39,9 +42,13 @@ class Lowered:
     # lowered action name -> (original name, argument template); a template entry is an int
     # (index into the lowered action's arguments) or a str (a constant substituted in).
     templates: dict[str, tuple[str, tuple[int | str, ...]]]
+    # names changed so that every reader accepts them (see :func:`lower`)
+    renaming: Renaming | None = None
 
     def map_plan(self, plan: Plan) -> Plan:
         out: Plan = []
+        if self.renaming:
+            plan = self.renaming.plan_back(list(plan))
         for name, args in plan:
             if name.startswith(GOAL_ACTION):
                 continue
@@ -99,7 +106,11 @@ def lower(
     )
     domain = replace(domain, requirements=requirements_of(domain, problem))
     problem = replace(problem, requirements=None)
-    return Lowered(domain, problem, scale, templates)
+    # unified-planning's reader keeps every kind of name in one namespace (an action and a
+    # predicate may not share a name) and wants plain identifiers: rename what offends it,
+    # and map plans back.
+    domain, problem, renaming = rename_task(domain, problem)
+    return Lowered(domain, problem, scale, templates, renaming or None)
 
 
 def requirements_of(domain: S.Domain, problem: S.Problem) -> tuple[str, ...]:
