@@ -1,0 +1,153 @@
+"""Plan constraints (paper §VI-A, Algorithm 2): the constrained problem keeps the old plan's
+structure and constants, lets the free values change, and binds a repeated free value once.
+
+The domain is the shape of the paper's example: ``[move(arm, @aq1, @at1, @aq2),
+pick(D, @p1, gD, @bq1, @aq2)]``; ``arm``, ``D`` and ``gD`` are constants, the rest free.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from ssr_compile import syntax as S
+from ssr_compile.compile.constraints import ASSIGNED, BOUND, constrain_plan
+from ssr_compile.compile.pipeline import compile_problem
+from ssr_compile.parse import parse_domain, parse_problem
+from ssr_compile.planners import get_planner
+from ssr_compile.planners.validate import validate_plan
+from ssr_compile.preimage import PlanInvalid, plan_preimage
+
+DOMAIN = """
+(define (domain arm-pick) (:requirements :strips)
+  (:predicates (arm ?a) (atconf ?a ?q) (motion ?q1 ?t ?q2) (atpose ?o ?p) (grasp ?o ?g)
+               (atbase ?bq) (kin ?o ?p ?g ?bq ?aq) (handempty) (holding ?o ?g))
+  (:action move :parameters (?a ?q1 ?t ?q2)
+    :precondition (and (arm ?a) (atconf ?a ?q1) (motion ?q1 ?t ?q2))
+    :effect (and (atconf ?a ?q2) (not (atconf ?a ?q1))))
+  (:action pick :parameters (?o ?p ?g ?bq ?aq)
+    :precondition (and (atpose ?o ?p) (grasp ?o ?g) (atbase ?bq) (kin ?o ?p ?g ?bq ?aq)
+                       (handempty))
+    :effect (and (holding ?o ?g) (not (handempty)) (not (atpose ?o ?p)))))
+"""
+# After replanning: D was re-observed at p9; the old values aq1, at1, aq2, p1 are gone.
+# kin also holds for aq8 (no motion reaches it) and for another object E.
+PROBLEM = """
+(define (problem arm-pick-new) (:domain arm-pick)
+  (:objects arm d e gd ge p9 pe bq1 aq0 aq7 aq8 at5)
+  (:init (arm arm) (atconf arm aq0) (motion aq0 at5 aq7) (atpose d p9) (atpose e pe)
+         (grasp d gd) (grasp e ge) (atbase bq1) (handempty)
+         (kin d p9 gd bq1 aq7) (kin d p9 gd bq1 aq8) (kin e pe ge bq1 aq0))
+  (:goal (or (exists (?g) (holding d ?g)) (exists (?g) (holding e ?g)))))
+"""
+TAIL = [("move", ("arm", "aq1", "at1", "aq2")), ("pick", ("d", "p1", "gd", "bq1", "aq2"))]
+CONSTANTS = {"arm", "d", "gd"}
+
+
+def _task():
+    return parse_domain(DOMAIN), parse_problem(PROBLEM)
+
+
+def _constrained():
+    d, p = _task()
+    return d, p, constrain_plan(d, p, TAIL, lambda v: v in CONSTANTS)
+
+
+def test_structure_of_the_constrained_problem():
+    _, _, c = _constrained()
+    assert [a.name for a in c.domain.actions] == ["move-step1", "pick-step2"]
+    assert c.steps == {"move-step1": ("move", 1), "pick-step2": ("pick", 2)}
+    # Free values become free-variable objects; aq2 (used twice) is one object.
+    assert set(c.free.values()) == {"aq1", "at1", "aq2", "p1", "bq1"}
+    assert len(c.free) == 5
+    pick = c.domain.actions[1]
+    pre = S.conjuncts(pick.precondition)
+    assert S.Atom("ssr-applied-1") in pre
+    assert S.Atom("=", (S.Var("?o"), S.Const("d"))) in pre
+    assert S.Atom("=", (S.Var("?g"), S.Const("gd"))) in pre
+    aq2 = next(k for k, v in c.free.items() if v == "aq2")
+    guard = S.Imply(S.Atom(BOUND, (S.Const(aq2),)), S.Atom(ASSIGNED, (S.Const(aq2), S.Var("?aq"))))
+    assert guard in pre
+    assert S.Atom("ssr-applied-2") in S.conjuncts(c.problem.goal)
+
+
+def test_constrained_plan_forces_sequence_and_constants_and_maps_back():
+    d, p = _task()
+    fd = get_planner("fd")
+    # Unconstrained, picking e needs no motion at all.
+    free = compile_problem(d, None, p, caps=fd.capabilities)
+    result = fd.solve(free.domain, free.problem, time_limit=20)
+    assert free.map_plan(result.actions) == [("pick", ("e", "pe", "ge", "bq1", "aq0"))]
+    c = compile_problem(d, None, p, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    result = fd.solve(c.domain, c.problem, time_limit=20)
+    assert result.status == "solved", result.message
+    plan = c.map_plan(result.actions)
+    # Same actions, same constants; free values replaced; aq2 bound once (aq7, not aq8).
+    assert plan == [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq7")),
+    ]
+    ok, why = validate_plan(d, p, plan)
+    assert ok, why
+
+
+def test_repeated_free_variable_binds_consistently():
+    d, p, c = _constrained()
+    # Valid in the original domain (pick does not look at the arm conf)...
+    inconsistent = [("move", ("arm", "aq0", "at5", "aq7")), ("pick", ("d", "p9", "gd", "bq1", "aq8"))]
+    assert validate_plan(d, p, inconsistent)[0]
+    # ...but the constrained problem refuses aq8 for the aq2 already bound to aq7.
+    steps = [(f"{n}-step{i}", a) for i, (n, a) in enumerate(inconsistent, 1)]
+    with pytest.raises(PlanInvalid):
+        plan_preimage(c.domain, c.problem, steps)
+    good = [("move-step1", inconsistent[0][1]), ("pick-step2", ("d", "p9", "gd", "bq1", "aq7"))]
+    plan_preimage(c.domain, c.problem, good)
+
+
+def test_constants_and_order_and_last_step_are_required():
+    d, p, c = _constrained()
+    with pytest.raises(PlanInvalid):  # another object than the constant d
+        plan_preimage(c.domain, c.problem, [("pick-step2", ("e", "pe", "ge", "bq1", "aq0"))])
+    with pytest.raises(PlanInvalid):  # step 2 without step 1 (ssr-applied-1)
+        plan_preimage(c.domain, c.problem, [("pick-step2", ("d", "p9", "gd", "bq1", "aq8"))])
+    # Holding d some other way does not reach the goal without ssr-applied-2.
+    p2 = replace(c.problem, init=c.problem.init + (S.Atom("holding", (S.Const("d"), S.Const("gd"))),))
+    with pytest.raises(PlanInvalid):
+        plan_preimage(c.domain, p2, [])
+    with pytest.raises(PlanInvalid):
+        plan_preimage(c.domain, p2, [("move-step1", ("arm", "aq0", "at5", "aq7"))])
+
+
+def test_changed_constant_makes_it_unsolvable():
+    d, p = _task()
+    tail = [("move", ("arm", "aq1", "at1", "aq2")), ("pick", ("d", "p1", "gx", "bq1", "aq2"))]
+    fd = get_planner("fd")
+    c = compile_problem(
+        d, None, p, caps=fd.capabilities, plan_tail=tail, is_constant={"arm", "d", "gx"}.__contains__
+    )
+    assert fd.solve(c.domain, c.problem, time_limit=20).status == "unsolvable"
+
+
+def test_pyperplan_solves_the_constrained_problem_too():
+    d, p = _task()
+    pp = get_planner("pyperplan")
+    c = compile_problem(d, None, p, caps=pp.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    result = pp.solve(c.domain, c.problem, time_limit=20)
+    assert result.status == "solved", result.message
+    assert c.map_plan(result.actions) == [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq7")),
+    ]
+
+
+def test_bad_tails_are_refused():
+    d, p = _task()
+    from ssr_compile.errors import UnsupportedError
+
+    with pytest.raises(ValueError):
+        constrain_plan(d, p, [], lambda v: False)
+    with pytest.raises(UnsupportedError, match="fly"):
+        constrain_plan(d, p, [("fly", ("x",))], lambda v: False)
+    with pytest.raises(UnsupportedError, match="takes 4"):
+        constrain_plan(d, p, [("move", ("arm",))], lambda v: False)
