@@ -1,0 +1,145 @@
+; The kitchen of the paper's experiments (§IV, §IV-A, §V, §VIII, appendix) in belief space.
+; Robot parts: base (x, y, yaw) and arm (7 joints).  Every object's pose is a belief (a
+; particle distribution, streams/belief.py); beliefs of objects in a drawer are relative to the
+; drawer, so they move with it and pull/push need no effect on them.  Drawers take two angles
+; (open, closed).  Streams in stream.pddl, implementations in streams/kitchen_module.py.
+(define (domain kitchen)
+  (:requirements :strips :equality :negative-preconditions :existential-preconditions
+                 :universal-preconditions :disjunctive-preconditions :conditional-effects
+                 :derived-predicates :action-costs)
+  (:constants base arm stove)
+  (:predicates
+    ; static: given in the problem
+    (graspable ?o) (tall ?o) (surface ?s) (fixed ?s) (drawer ?d) (placeable ?o ?s)
+    (angle ?d ?a) (open ?d ?a) (closed ?d ?a) (above ?d1 ?d2)
+    (stow ?q) (stowempty ?q) (stowheld ?q)
+    (possible ?o ?pb ?s)              ; prior belief ?pb may put ?o on ?s (sample-obs there)
+    ; static: certified by streams
+    (conf ?r ?q) (traj ?r ?t) (poseb ?o ?pb) (grasp ?o ?g)
+    (localized ?o ?pb)                ; ?pb is precise enough to grasp from
+    (beliefon ?o ?pb ?s)              ; ?pb puts ?o on ?s (with high probability)
+    (basefor ?o ?pb ?g ?bq)           ; from ?bq, the arm may reach ?o at ?pb with ?g
+    (kin ?o ?pb ?g ?bq ?aq ?t)        ; at ?bq, ?t approaches ?o at ?pb with ?g from arm conf ?aq
+    (reach ?bq ?aq)                   ; arm conf ?aq is used at base conf ?bq
+    (motion ?r ?q1 ?t ?q2)            ; base trajectory ?t from ?q1 to ?q2
+    (armmotion ?bq ?q1 ?t ?q2)        ; arm trajectory ?t from ?q1 to ?q2 at base conf ?bq
+    (drawerbase ?d ?bq) (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)
+    (pressbase ?bq) (presskin ?bq ?aq ?t)
+    (obs ?o ?obs) (obsof ?pb ?obs) (obson ?obs ?s)
+    (beliefupdate ?o ?pb1 ?obs ?pb2)
+    (bvis ?o ?obs ?o2 ?pb2)           ; ?o2 at ?pb2 leaves ?obs's region visible (paper §IV-A)
+    (bvisrobot ?o ?obs ?bq)           ; so does the robot at ?bq with its arm stowed
+    (cfree ?o ?pb ?o2 ?pb2)
+    ; fluents
+    (atconf ?r ?q) (atangle ?d ?a) (handempty) (atgrasp ?o ?g) (atposeb ?o ?pb)
+    (cooked ?o) (stoveon)
+    ; derived
+    (boccluded ?o ?obs) (armstowed) (accessible ?o ?pb) (blocked ?d) (unsafe ?o ?pb)
+    (on ?o ?s))
+  (:functions (obscost ?o ?pb ?obs) (total-cost) - number)
+
+  ; paper §IV-A: the region of ?obs may be hidden by another object's belief, by the robot,
+  ; by the drawer holding it being closed or by an open drawer above that one
+  (:derived (boccluded ?o ?obs)
+    (or (exists (?o2 ?pb2)
+          (and (obs ?o ?obs) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
+               (not (bvis ?o ?obs ?o2 ?pb2))))
+        (exists (?bq)
+          (and (obs ?o ?obs) (atconf base ?bq) (not (bvisrobot ?o ?obs ?bq))))
+        (exists (?d ?a)
+          (and (obson ?obs ?d) (atangle ?d ?a) (closed ?d ?a)))
+        (exists (?d ?d2 ?a)
+          (and (obson ?obs ?d2) (above ?d ?d2) (atangle ?d ?a) (open ?d ?a)))))
+
+  ; the arm is tucked (hand empty) or in its carry configuration (holding)
+  (:derived (armstowed)
+    (exists (?q)
+      (and (atconf arm ?q)
+           (or (and (handempty) (stowempty ?q))
+               (and (not (handempty)) (stowheld ?q))))))
+
+  ; ?o at ?pb can be reached: on a fixed surface or in an open drawer
+  (:derived (accessible ?o ?pb)
+    (or (exists (?s) (and (beliefon ?o ?pb ?s) (fixed ?s)))
+        (exists (?d ?a) (and (beliefon ?o ?pb ?d) (atangle ?d ?a) (open ?d ?a)))))
+
+  ; a tall object in a drawer keeps it from closing
+  (:derived (blocked ?d)
+    (exists (?o ?pb) (and (drawer ?d) (tall ?o) (atposeb ?o ?pb) (beliefon ?o ?pb ?d))))
+
+  ; placing ?o at ?pb may collide with another object at its current belief
+  (:derived (unsafe ?o ?pb)
+    (exists (?o2 ?pb2)
+      (and (poseb ?o ?pb) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
+           (not (cfree ?o ?pb ?o2 ?pb2)))))
+
+  ; the robot believes ?o is on ?s, precisely enough to act on it
+  (:derived (on ?o ?s)
+    (exists (?pb) (and (atposeb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s))))
+
+  (:action move-base
+    :parameters (?q1 ?t ?q2)
+    :precondition (and (motion base ?q1 ?t ?q2) (atconf base ?q1) (armstowed))
+    :effect (and (atconf base ?q2) (not (atconf base ?q1))
+                 (increase (total-cost) 1)))
+
+  (:action move-arm
+    :parameters (?bq ?q1 ?t ?q2)
+    :precondition (and (armmotion ?bq ?q1 ?t ?q2) (atconf base ?bq) (atconf arm ?q1))
+    :effect (and (atconf arm ?q2) (not (atconf arm ?q1))
+                 (increase (total-cost) 1)))
+
+  (:action pick
+    :parameters (?o ?pb ?g ?bq ?aq ?t)
+    :precondition (and (kin ?o ?pb ?g ?bq ?aq ?t) (atposeb ?o ?pb) (handempty)
+                       (accessible ?o ?pb) (atconf base ?bq) (atconf arm ?aq))
+    :effect (and (atgrasp ?o ?g) (not (atposeb ?o ?pb)) (not (handempty))
+                 (increase (total-cost) 1)))
+
+  (:action place
+    :parameters (?o ?pb ?g ?bq ?aq ?t)
+    :precondition (and (kin ?o ?pb ?g ?bq ?aq ?t) (atgrasp ?o ?g) (accessible ?o ?pb)
+                       (not (unsafe ?o ?pb)) (atconf base ?bq) (atconf arm ?aq))
+    :effect (and (atposeb ?o ?pb) (handempty) (not (atgrasp ?o ?g))
+                 (increase (total-cost) 1)))
+
+  (:action pull
+    :parameters (?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)
+    :precondition (and (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t) (closed ?d ?a1) (open ?d ?a2)
+                       (atangle ?d ?a1) (handempty) (atconf base ?bq) (atconf arm ?aq1))
+    :effect (and (atangle ?d ?a2) (not (atangle ?d ?a1))
+                 (atconf arm ?aq2) (not (atconf arm ?aq1))
+                 (increase (total-cost) 1)))
+
+  (:action push
+    :parameters (?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)
+    :precondition (and (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t) (open ?d ?a1) (closed ?d ?a2)
+                       (atangle ?d ?a1) (not (blocked ?d)) (handempty)
+                       (atconf base ?bq) (atconf arm ?aq1))
+    :effect (and (atangle ?d ?a2) (not (atangle ?d ?a1))
+                 (atconf arm ?aq2) (not (atconf arm ?aq1))
+                 (increase (total-cost) 1)))
+
+  ; turning the stove on cooks what the robot believes is on it
+  (:action press-on
+    :parameters (?bq ?aq ?t)
+    :precondition (and (presskin ?bq ?aq ?t) (not (stoveon)) (handempty)
+                       (atconf base ?bq) (atconf arm ?aq))
+    :effect (and (stoveon)
+                 (forall (?o ?pb)
+                   (when (and (atposeb ?o ?pb) (beliefon ?o ?pb stove)) (cooked ?o)))
+                 (increase (total-cost) 1)))
+
+  (:action press-off
+    :parameters (?bq ?aq ?t)
+    :precondition (and (presskin ?bq ?aq ?t) (stoveon) (handempty)
+                       (atconf base ?bq) (atconf arm ?aq))
+    :effect (and (not (stoveon)) (increase (total-cost) 1)))
+
+  ; paper §IV-A: the belief update of a hypothesised detection, at the cost of §V
+  (:action detect
+    :parameters (?o ?pb1 ?obs ?pb2)
+    :precondition (and (beliefupdate ?o ?pb1 ?obs ?pb2) (atposeb ?o ?pb1) (armstowed)
+                       (not (boccluded ?o ?obs)))
+    :effect (and (atposeb ?o ?pb2) (not (atposeb ?o ?pb1))
+                 (increase (total-cost) (obscost ?o ?pb1 ?obs)))))

@@ -1,0 +1,310 @@
+"""The streams module of ``domains/pddl/kitchen`` (paper §IV, §IV-A, §V, §VII).
+
+:func:`make_module` binds the kitchen's stream declarations to a task's world: the geometric
+streams of :class:`streams.kitchen.KitchenStreams` and the belief streams of
+``streams.belief_obs``.  Conventions (see ``sim/problem.py``): beliefs are in the canonical
+frame (world frame, every drawer fully open); drawer angles are ``(drawer, q)``; a localized
+belief stands for its point estimate, as an :class:`~streams.kitchen.ObjPose` relative to its
+surface.
+
+Streams are evaluated in a *planning state* of the world, never in its latent state: objects
+are taken out of the scene (their poses are beliefs; object-object placement conflicts are the
+``test-cfree`` stream's job, visibility the ``test-vis`` stream's), the arm is tucked and the
+hand empty, the drawers stay as the robot saw them, except that grasps of a pose in a drawer are
+computed with that drawer open.  Approximations, on purpose: arm and base motions are planned
+with the hand empty (the carried object is not collision-checked) and without the objects.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+import numpy as np
+
+from sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
+from sim.geometry import invert, multiply, pose, quat_from_yaw
+from sim.problem import canonical_surface
+from sim.robot import ARM_TUCK
+from sim.tasks import Task
+from sim.world import DRAWER_TRAVEL, DRAWERS, World
+from ssr_compile.stream import StreamInfo, StreamsModule
+from streams.belief import ObservationModel, PoseBelief
+from streams.belief_obs import (
+    Observation,
+    ObsRegion,
+    obs_cost,
+    update_belief,
+    visibility_lower_bound,
+)
+from streams.kitchen import Grasp, KitchenStreams, ObjPose
+
+MODEL = ObservationModel(p_fn=0.1)
+EPS = 0.1  # occlusion tolerance of an observation (paper §V-B)
+DELTA = 0.1  # radius of an observation's region X_i, metres
+C_DETECT = 1.0  # c: one detection
+C_RECOVER = 1.0  # c': a failed detection, then look again
+LOCALIZED_STD = 0.02  # a belief is localized: x, y spread at most 2 cm ...
+ON_PROB = 0.95  # ... with at least this mass on one surface
+
+
+def is_localized(pb: PoseBelief, surface: str | None = None) -> bool:
+    probs = pb.surface_probs()
+    s = pb.most_likely_surface() if surface is None else surface
+    if probs.get(s, 0.0) < ON_PROB:
+        return False
+    return float(pb.std(s)[:2].max()) <= LOCALIZED_STD + 1e-12
+
+
+class KitchenModule:
+    """Stream callables over one task's world."""
+
+    def __init__(self, task: Task, rng: np.random.Generator) -> None:
+        self.task = task
+        self.world: World = task.world
+        self.rng = rng
+        self.ks = KitchenStreams(self.world, rng)
+        self.drawers = dict(self.world.drawer_q)  # the openings the robot saw
+        self.n_objects = max(1, len(task.prior))
+        self._frames = {s: self._canonical_frame(s) for s in self.world.surfaces}
+
+    # -- planning state -------------------------------------------------------------------
+    def _canonical_frame(self, surface: str):
+        w = self.world
+        with w.saved():
+            for d in DRAWERS:
+                w.set_drawer(d, DRAWER_TRAVEL)
+            return w.surface_frame(surface)
+
+    @contextmanager
+    def planning(self, open_drawer: str | None = None):
+        w = self.world
+        with w.saved():
+            w.held = None
+            for o in list(w.objects):
+                if w.support.get(o) is not None:
+                    w.remove_object(o)
+            for d, q in self.drawers.items():
+                w.set_drawer(d, DRAWER_TRAVEL if d == open_drawer else q)
+            w.set_arm(ARM_TUCK)
+            yield w
+
+    def _each(self, make: Callable[[], Iterator], open_drawer: str | None = None) -> Iterator:
+        """Iterate a geometric generator, each draw inside the planning state."""
+        it = None
+        while True:
+            with self.planning(open_drawer):
+                if it is None:
+                    it = iter(make())
+                try:
+                    out = next(it)
+                except StopIteration:
+                    return
+            yield out
+
+    # -- values -----------------------------------------------------------------------------
+    def obj_pose(self, pb: PoseBelief) -> ObjPose:
+        """The point estimate of a localized belief, relative to its surface."""
+        s, (x, y, z, yaw) = pb.point_estimate()
+        rel = multiply(invert(self._frames[s]), pose((x, y, z), quat_from_yaw(yaw)))
+        return ObjPose(pb.obj, s, rel)
+
+    def belief_of(self, p: ObjPose) -> PoseBelief:
+        (x, y, z), q = multiply(self._frames[p.surface], p.rel)
+        yaw = math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2))
+        return PoseBelief.point(p.obj, canonical_surface(self.world, p.surface), (x, y, z, yaw))
+
+    @staticmethod
+    def _drawer_of(pb: PoseBelief) -> str | None:
+        s = pb.most_likely_surface()
+        return s if s in DRAWERS else None
+
+    # -- geometric streams -------------------------------------------------------------------
+    def sample_grasp(self, o: str):
+        return self.ks.sample_grasps(o)
+
+    def sample_placement(self, o: str, s: str):
+        for (p,) in self._each(
+            lambda: self.ks.sample_placements(o, s), s if s in DRAWERS else None
+        ):
+            yield (self.belief_of(p),)
+
+    def inv_reach(self, o: str, pb: PoseBelief, g: Grasp):
+        p = self.obj_pose(pb)
+        return self._each(lambda: self.ks.inv_reach(o, p, g), self._drawer_of(pb))
+
+    def inv_kin(self, o: str, pb: PoseBelief, g: Grasp, bq):
+        with self.planning(self._drawer_of(pb)):
+            return self.ks.inv_kin(o, self.obj_pose(pb), g, bq)
+
+    def plan_base_motion(self, q1, q2):
+        with self.planning():
+            return self.ks.plan_base_motion(q1, q2)
+
+    def plan_arm_motion(self, bq, q1, q2):
+        with self.planning():
+            return self.ks.plan_arm_motion(bq, q1, q2)
+
+    def sample_drawer_base(self, d: str):
+        return self._each(lambda: self.ks.sample_drawer_base(d))
+
+    def _plan_drawer(self, d: str, a1, a2, bq):
+        with self.planning():
+            m = self.ks.plan_drawer(d, a1[1], a2[1], bq)
+        return None if m is None else (m.arm_path[0], m.arm_path[-1], m)
+
+    def sample_press_base(self, s: str):
+        return self._each(self.ks.sample_press_base)
+
+    def plan_press(self, bq):
+        with self.planning():
+            res = self.ks.plan_press(bq)
+        return None if res is None else (res[0][0], res[0])
+
+    # -- belief streams ----------------------------------------------------------------------
+    def sample_obs(self, o: str, pb: PoseBelief, s: str) -> Iterator[tuple[Observation]]:
+        """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite)."""
+        on = (pb.surface_names == s) & (pb.weights > 0)
+        if not on.any():
+            return
+        dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
+        near = (dist <= DELTA) & on[None, :] & on[:, None]
+        covered = ~on
+        while not covered.all():
+            gain = near @ np.where(covered, 0.0, pb.weights)
+            gain[covered] = -1.0
+            best = np.flatnonzero(gain >= gain.max() - 1e-12)
+            i = int(self.rng.choice(best))
+            members = np.flatnonzero(near[i])
+            covered[members] = True
+            region = ObsRegion(s, pb.poses[members], pb.poses[i], DELTA, members, pb.digest)
+            yield (Observation(o, pb.poses[i], region, EPS),)
+
+    def update_belief(self, o: str, pb1: PoseBelief, obs: Observation, s: str):
+        if not o == pb1.obj == obs.obj:
+            return None
+        post = update_belief(o, pb1, obs, MODEL)
+        return (post,) if is_localized(post, s) else None
+
+    def _visible_despite(self, obs: Observation, body: int, pb: PoseBelief | None) -> bool:
+        he = self.world.half_extents[obs.obj]
+        cam = self.world.camera
+        lb = visibility_lower_bound(obs, body, pb, cam, half_extents=he)
+        return lb >= 1.0 - obs.eps - 1e-12
+
+    def test_vis(self, o: str, obs: Observation, o2: str, pb2: PoseBelief) -> bool:
+        if o == o2 or pb2.obj != o2:
+            return True
+        with self.planning():
+            return self._visible_despite(obs, self.world.objects[o2], pb2)
+
+    def test_vis_robot(self, o: str, obs: Observation, bq) -> bool:
+        with self.planning():
+            self.world.set_base(bq)
+            return self._visible_despite(obs, self.world.robot.body, None)
+
+    def test_cfree(self, o: str, pb: PoseBelief, o2: str, pb2: PoseBelief) -> bool:
+        """Footprint circles of ``o`` (point estimate) and of ``o2``'s particles on the same
+        surface overlap with probability at most EPS."""
+        if o == o2:
+            return True
+        s, x = pb.point_estimate()
+        he1, he2 = self.world.half_extents[o], self.world.half_extents[o2]
+        r = math.hypot(he1[0], he1[1]) + math.hypot(he2[0], he2[1])
+        same = pb2.surface_names == s
+        d = np.linalg.norm(pb2.poses[:, :2] - x[:2], axis=1)
+        return float(pb2.weights[same & (d < r)].sum()) <= EPS
+
+    def obscost(self, o: str, pb: PoseBelief, obs: Observation) -> float | None:
+        if not o == pb.obj == obs.obj:
+            return None
+        cost = obs_cost(obs, pb, self.n_objects, C_DETECT, C_RECOVER, MODEL)
+        return cost if math.isfinite(cost) else None
+
+    def streams(self) -> dict[str, Callable]:
+        return {
+            "sample-grasp": self.sample_grasp,
+            "sample-placement": self.sample_placement,
+            "inv-reach": self.inv_reach,
+            "inv-kin": self.inv_kin,
+            "plan-base-motion": self.plan_base_motion,
+            "plan-arm-motion": self.plan_arm_motion,
+            "sample-drawer-base": self.sample_drawer_base,
+            "plan-pull": self._plan_drawer,
+            "plan-push": self._plan_drawer,
+            "sample-press-base": self.sample_press_base,
+            "plan-press": self.plan_press,
+            "sample-obs": self.sample_obs,
+            "update-belief": self.update_belief,
+            "test-vis": self.test_vis,
+            "test-vis-robot": self.test_vis_robot,
+            "test-cfree": self.test_cfree,
+            "obscost": self.obscost,
+        }
+
+
+STREAM_INFO = {
+    "sample-grasp": StreamInfo(cost=0.01),
+    "sample-placement": StreamInfo(cost=0.1),
+    "inv-reach": StreamInfo(p_success=0.8, cost=1.0),
+    "inv-kin": StreamInfo(kind="function", p_success=0.8, cost=0.5),
+    "plan-base-motion": StreamInfo(deferrable=True, kind="function", p_success=0.95, cost=2.0),
+    "plan-arm-motion": StreamInfo(deferrable=True, kind="function", p_success=0.95, cost=2.0),
+    "sample-drawer-base": StreamInfo(p_success=0.8, cost=2.0),
+    "plan-pull": StreamInfo(kind="function", p_success=0.9, cost=0.5),
+    "plan-push": StreamInfo(kind="function", p_success=0.9, cost=0.5),
+    "sample-press-base": StreamInfo(p_success=0.8, cost=1.0),
+    "plan-press": StreamInfo(kind="function", p_success=0.9, cost=0.3),
+    "sample-obs": StreamInfo(cost=0.05),
+    "update-belief": StreamInfo(kind="function", p_success=0.9, cost=0.1),
+    "test-vis": StreamInfo(kind="test", p_success=0.7, cost=0.2),
+    "test-vis-robot": StreamInfo(kind="test", p_success=0.5, cost=0.2),
+    "test-cfree": StreamInfo(kind="test", p_success=0.9, cost=0.01),
+    # planned with before evaluation: c, the cheapest any detection can be (p = 1)
+    "obscost": StreamInfo(optimistic_value=C_DETECT),
+}
+
+
+def make_module(task: Task, rng: np.random.Generator, values: dict | None = None) -> StreamsModule:
+    """The streams module for ``task`` (``values``: those of :func:`sim.problem.task_problem`;
+    built here when not given)."""
+    if values is None:
+        from sim.problem import task_problem
+
+        values = task_problem(task)[1]
+    km = KitchenModule(task, rng)
+    module = StreamsModule(
+        "streams.kitchen_module", streams=km.streams(), info=dict(STREAM_INFO), values=values
+    )
+    module.module = km
+    return module
+
+
+def to_action(name: str, values: tuple, arm_now=None) -> Action | None:
+    """The simulator action of a plan step (``values``: the step's argument values); ``None``
+    for ``detect`` (an observation, not a motion).  A ``move-arm`` trajectory is certified both
+    ways: it is reversed when it ends where the arm is (``arm_now``)."""
+    if name == "move-base":
+        return MoveBase(tuple(values[1]))
+    if name == "move-arm":
+        path = tuple(values[2])
+        if arm_now is not None and np.allclose(path[-1], arm_now, atol=1e-6):
+            path = path[::-1]
+        elif np.allclose(path[-1], values[1], atol=1e-6):
+            path = path[::-1]
+        return MoveArm(path)
+    if name in ("pick", "place"):
+        o, pb, g, _, _, t = values
+        if name == "pick":
+            return Pick(o, g.pose, tuple(t))
+        return Place(o, pb.most_likely_surface(), tuple(t))
+    if name in ("pull", "push"):
+        m = values[6]
+        assert isinstance(m, DrawerMotion)
+        return m
+    if name in ("press-on", "press-off"):
+        return Press(tuple(values[2]))
+    if name == "detect":
+        return None
+    raise ValueError(f"unknown action {name!r}")
