@@ -337,10 +337,12 @@ def test_check_plan_placing_b0_into_the_occupied_goal_region_fails():
 # ---------------------------------------------------------------- (d) the Focused solver
 
 
-def _solve(folder: Path, name: str, **options):
+def _solve(folder: Path, name: str, time_limit: float = 10, **options):
     focused = pytest.importorskip("ssr_compile.focused")
     domain, streams, problem = load(folder, name)
-    solution = focused.solve(domain, streams, problem, from_module(T), time_limit=30, **options)
+    solution = focused.solve(
+        domain, streams, problem, from_module(T), time_limit=time_limit, **options
+    )
     assert solution.solved, solution.message
     plan = [(step.name, step.args) for step in solution.plan]
     cost = T.check_plan(domain, problem, solution.values.value, plan)
@@ -364,7 +366,7 @@ def test_solver_moves_one_block_into_the_goal_region():
 
 
 def test_solver_moves_the_blocker_first():
-    solution, plan, _ = _solve(TAMP2D, "problem-blocked.pddl", planner="fd:opt")
+    solution, plan, _ = _solve(TAMP2D, "problem-blocked.pddl", time_limit=25, planner="fd:opt")
     picks = [args[0] for name, args in plan if name == "pick"]
     assert picks == ["b1", "b0"]
     rtable = T.VALUES["rtable"]
