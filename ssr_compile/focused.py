@@ -129,16 +129,14 @@ class _Evaluation:
         # before: reuse its outcome instead of asking an exhausted generator (or a
         # deterministic test, or a function) again and calling the plan a failure.
         self.called = False
-        if inst in self.outcomes:
-            known = self.outcomes[inst]
-            if known is None or inst.kind == "function":
-                return known is not None and known is not False
-            if known is False:
-                return False
-            if inst.kind != "test" and inst in self.exhausted:
-                for opt, real in zip(res.outputs, known):
-                    binding[opt] = real
-                return True
+        known = self.outcomes.get(inst)
+        if inst.kind in ("function", "test") and known is not None:
+            self.tried.add(inst)
+            return bool(known)
+        if inst.kind == "stream" and isinstance(known, tuple) and inst in self.exhausted:
+            for opt, real in zip(res.outputs, known):
+                binding[opt] = real
+            return True
         self.called = True
         fn = self.module.streams[inst.stream]
         args = tuple(self.values.value(x) for x in inputs)
@@ -172,8 +170,6 @@ class _Evaluation:
             if gen.exhausted:
                 self.exhausted.add(inst)
             if out is None:
-                if inst not in self.outcomes:
-                    self.outcomes[inst] = False
                 return False
             if len(out) != len(decl.outputs):
                 raise StreamError(

@@ -1,0 +1,241 @@
+"""The Focused solver on the pp1d fixture (1-D pick-and-place, Python streams).
+
+Solutions are checked by an independent simulator over the geometric values (written here,
+not taken from the solver), certificates and per-stream statistics against the streams
+module's own call counts, deferral by counting motion-planner calls.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import pytest
+
+from ssr_compile import syntax as S
+from ssr_compile.errors import StreamError
+from ssr_compile.focused import solve
+from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
+from ssr_compile.stream import load_streams_module
+
+PP = Path(__file__).parent / "fixtures" / "compile" / "pp1d"
+GOAL = (4.5, 5.5)
+
+
+def task(problem: str = "problem-blocked.pddl"):
+    d = parse_domain((PP / "domain.pddl").read_text())
+    s = parse_stream_file((PP / "stream.pddl").read_text())
+    p = parse_problem((PP / problem).read_text())
+    return d, s, p
+
+
+def fresh_module():
+    return load_streams_module(str(PP / "streams.py"))
+
+
+def simulate(plan, values) -> None:
+    """An independent check of a real plan in 1-D: kinematics, motions, collisions, goal."""
+    blocks = {"a": values["pa"], "b": None}
+    q = values["q0"][1]
+    holding = None
+    for step in plan:
+        v = dict(zip(step.args, step.values))
+        if step.name == "move":
+            q1, t, q2 = step.values
+            assert q1[1] == pytest.approx(q), step
+            assert t[0] == "traj" and (t[1], t[2]) == pytest.approx((q1[1], q2[1])), step
+            q = q2[1]
+        elif step.name == "pick":
+            b, p, g, conf = step.args
+            assert holding is None and blocks[b] == pytest.approx(v[p]), step
+            assert conf and v[conf][1] == pytest.approx(v[p] + v[g][1]) == pytest.approx(q)
+            holding, blocks[b] = b, None
+        elif step.name == "place":
+            b, p, g, conf = step.args
+            assert holding == b and v[conf][1] == pytest.approx(v[p] + v[g][1])
+            assert v[conf][1] == pytest.approx(q), step
+            for other, x in blocks.items():
+                assert other == b or x is None or abs(x - v[p]) >= 1.0, f"collision: {step}"
+            holding, blocks[b] = None, v[p]
+        else:
+            raise AssertionError(step)
+    assert holding is None and GOAL[0] <= blocks["a"] <= GOAL[1], blocks
+
+
+def run(problem="problem-blocked.pddl", module=None, **kw):
+    d, s, p = task(problem)
+    module = module or fresh_module()
+    if "b" not in module.values:
+        pass
+    kw.setdefault("initial_level", 3)
+    kw.setdefault("time_limit", 30)
+    return module, solve(d, s, p, module, **kw)
+
+
+def _values_with_b(module, problem):
+    values = dict(module.values)
+    return values, ("pb-goal" if "blocked" in problem else "pb-far")
+
+
+@pytest.mark.parametrize("problem", ["problem.pddl", "problem-blocked.pddl"])
+def test_solves_and_the_plan_simulates(problem):
+    module, sol = run(problem)
+    assert sol.status == "solved", sol.message
+    assert all(not step.deferred for step in sol.plan)
+    values, b_pose = _values_with_b(module, problem)
+    # The simulator starts b where the problem puts it.
+    blocks_b = values[b_pose]
+    plan = sol.plan
+    simulate_with_b(plan, values, blocks_b)
+    picks = [s.args[0] for s in plan if s.name == "pick"]
+    assert picks == (["b", "a"] if "blocked" in problem else ["a"])
+    # Certificate: the facts the plan relies on, with real names.
+    cert = set(sol.certificate)
+    for step in plan:
+        if step.name in ("pick", "place"):
+            assert S.Atom("kin", tuple(S.Const(x) for x in step.args)) in cert
+        if step.name == "move":
+            assert S.Atom("motion", tuple(S.Const(x) for x in step.args)) in cert
+    last = plan[-1]
+    assert S.Atom("contained", (S.Const("a"), S.Const(last.args[1]), S.Const("goal"))) in cert
+    if "blocked" in problem:
+        b_place = next(s for s in plan if s.name == "place" and s.args[0] == "b")
+        cfree = S.Atom("cfree", tuple(S.Const(x) for x in ("a", last.args[1], "b", b_place.args[1])))
+        assert cfree in cert
+    # Statistics count the calls the module saw (functions and tests are called once each).
+    calls = module.module.CALLS
+    for name in ("test-cfree", "plan-motion", "dist"):
+        assert sol.stats.streams[name].calls == calls[name], name
+    assert sol.stats.planner_calls == sol.stats.iterations >= 1
+    assert sol.cost == pytest.approx(
+        sum(abs(s.values[0][1] - s.values[2][1]) for s in plan if s.name == "move")
+        + sum(1 for s in plan if s.name != "move"),
+        abs=0.1 * len(plan),
+    )
+
+
+def simulate_with_b(plan, values, b):
+    class _V(dict):
+        pass
+
+    orig = {"a": values["pa"], "b": b}
+    # simulate() starts a at pa and b unknown; give it b's start.
+    blocks_start = orig
+    _simulate(plan, values, blocks_start)
+
+
+def _simulate(plan, values, blocks):
+    blocks = dict(blocks)
+    q = values["q0"][1]
+    holding = None
+    for step in plan:
+        v = dict(zip(step.args, step.values))
+        if step.name == "move":
+            q1, t, q2 = step.values
+            assert q1[1] == pytest.approx(q) and t[0] == "traj", step
+            assert (t[1], t[2]) == pytest.approx((q1[1], q2[1])), step
+            q = q2[1]
+        elif step.name == "pick":
+            b, p, g, conf = step.args
+            assert holding is None and blocks[b] == pytest.approx(v[p]), step
+            assert v[conf][1] == pytest.approx(v[p] + v[g][1]) and v[conf][1] == pytest.approx(q)
+            holding, blocks[b] = b, None
+        else:
+            assert step.name == "place", step
+            b, p, g, conf = step.args
+            assert holding == b and v[conf][1] == pytest.approx(v[p] + v[g][1])
+            assert v[conf][1] == pytest.approx(q), step
+            for other, x in blocks.items():
+                assert other == b or x is None or abs(x - v[p]) >= 1.0, f"collision: {step}"
+            holding, blocks[b] = None, v[p]
+    assert holding is None and GOAL[0] <= blocks["a"] <= GOAL[1], blocks
+
+
+def test_simulator_catches_a_collision():
+    module, sol = run()
+    plan = list(sol.plan)
+    with pytest.raises(AssertionError):  # b never moved out of the way
+        _simulate([s for s in plan if s.args[0] != "b" and s.name != "move"], module.values, {"a": 0.3, "b": 5.2})
+
+
+def test_failing_generator_and_test_are_recovered_from():
+    module = fresh_module()
+    module.module.FAIL_FIRST_IK = {0.3}  # a at its start
+    _, sol = run(module=module)
+    assert sol.status == "solved", sol.message
+    ik = sol.stats.streams["inverse-kin"]
+    cfree = sol.stats.streams["test-cfree"]
+    assert ik.failures >= 1 and ik.successes >= 1
+    assert cfree.failures >= 1 and cfree.successes >= 1  # b's first table pose hits a
+    _simulate(sol.plan, module.values, {"a": 0.3, "b": 5.2})
+
+
+def test_deferral_skips_motions_beyond_the_first_action():
+    on, off = fresh_module(), fresh_module()
+    _, sol_on = run("problem.pddl", module=on, defer=True)
+    _, sol_off = run("problem.pddl", module=off, defer=False)
+    assert sol_on.solved and sol_off.solved
+    # Off: every move has a real trajectory.
+    assert all(not s.deferred for s in sol_off.plan)
+    # On: the first action is real, later moves keep an optimistic trajectory...
+    assert sol_on.plan[0].name == "move" and not sol_on.plan[0].deferred
+    later_moves = [s for s in sol_on.plan[1:] if s.name == "move"]
+    assert later_moves and all(s.deferred == (s.args[1],) for s in later_moves)
+    assert all(s.values[1] is None for s in later_moves)
+    assert {r.instance.stream for r in sol_on.deferred} == {"plan-motion"}
+    # ...and the motion planner was called only for first actions (once per iteration at
+    # most), far less than without deferral.
+    motion_on, motion_off = on.module.CALLS["plan-motion"], off.module.CALLS["plan-motion"]
+    assert motion_on <= sol_on.stats.iterations
+    assert motion_off > motion_on
+    assert motion_off >= len([s for s in sol_off.plan if s.name == "move"])
+
+
+def test_time_limit_honoured():
+    module = fresh_module()
+    module.module.SLEEP = 0.4
+    start = time.monotonic()
+    _, sol = run(module=module, time_limit=0.5)
+    elapsed = time.monotonic() - start
+    assert sol.status == "timeout" and "time limit" in sol.message
+    assert elapsed < 2.0
+
+
+def test_max_cost_below_the_optimum_is_unsolvable():
+    _, sol = run("problem.pddl", max_cost=2.0, max_level=3)
+    assert sol.status == "unsolvable" and sol.plan is None
+    assert "cost bound" in sol.message
+
+
+def test_max_cost_above_the_plan_is_solved():
+    _, sol = run("problem.pddl", max_cost=100.0)
+    assert sol.solved and sol.cost < 100.0
+
+
+def test_stream_missing_from_module_is_a_stream_error():
+    module = fresh_module()
+    del module.streams["test-cfree"]
+    with pytest.raises(StreamError) as e:
+        run(module=module)
+    assert "test-cfree" in str(e.value) and e.value.line is not None
+
+
+def test_module_that_fails_to_import(tmp_path):
+    bad = tmp_path / "broken_streams.py"
+    bad.write_text("import math\nSTREAMS = {}\nraise RuntimeError('no robot attached')\n")
+    with pytest.raises(StreamError, match="no robot attached"):
+        load_streams_module(str(bad))
+    with pytest.raises(StreamError, match="does not exist"):
+        load_streams_module(str(tmp_path / "nothing.py"))
+    with pytest.raises(StreamError, match="cannot import"):
+        load_streams_module("no_such_streams_package_xyz")
+
+
+def test_solution_is_unsolvable_when_no_goal_pose_is_free():
+    # Goal region narrower than a block and b inside it forever: every placement collides.
+    module = fresh_module()
+    module.module.REGIONS = {"table": (5.2, 5.2), "goal": (4.9, 5.1)}
+    _, sol = run(module=module, max_level=4, time_limit=20)
+    assert sol.status == "unsolvable"
+    assert math.isfinite(sol.stats.total_time)
