@@ -55,6 +55,15 @@ def load_inputs(args, warnings: list[str]):
     for r in reports:
         r.raise_first()
         warnings.extend(r.warnings)
+    # Stream constructs the compiler refuses are reported against the stream file (the
+    # compiler passes only know line and column, and would be attributed to the domain).
+    from .compile.instantiate import refuse_unsupported
+
+    try:
+        refuse_unsupported(streams)
+    except SSRError as e:
+        e.file, e.source = sp, ssrc
+        raise
     return domain, streams, problem
 
 

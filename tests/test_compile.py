@@ -328,7 +328,9 @@ def test_fluents_and_optimizers_are_unsupported_with_a_position(text, word, line
         "(define (domain f) (:predicates (conf ?q) (traj ?t) (block ?o)) "
         "(:action noop :parameters () :precondition (and) :effect (and)))"
     )
-    p = parse_problem("(define (problem f) (:domain f) (:objects q) (:init (conf q)) (:goal (and)))")
+    p = parse_problem(
+        "(define (problem f) (:domain f) (:objects q) (:init (conf q)) (:goal (and)))"
+    )
     with pytest.raises(UnsupportedError) as e:
         compile_problem(d, parse_stream_file(text), p)
     assert word in str(e.value) and e.value.line == line and e.value.col is not None
@@ -514,9 +516,10 @@ def test_lowering_for_pyperplan_negation_equality_disjunction():
         for part in S.conjuncts(a.precondition):
             assert isinstance(part, S.Atom) and part.pred != "=", (a.name, part)
     names = {a.name for a in c.domain.actions}
-    assert any(n.startswith("walk") for n in names) and len(
-        [n for n in names if n.startswith("walk")]
-    ) == 2  # the disjunction split in two copies
+    assert (
+        any(n.startswith("walk") for n in names)
+        and len([n for n in names if n.startswith("walk")]) == 2
+    )  # the disjunction split in two copies
     grab = next(a for a in c.domain.actions if a.name.startswith("grab-key"))
     assert grab.parameters == ()  # (= ?r hall) substituted: the parameter disappears
     assert any(pred.name.startswith("not-") for pred in c.domain.predicates)

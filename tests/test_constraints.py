@@ -79,7 +79,9 @@ def test_constrained_plan_forces_sequence_and_constants_and_maps_back():
     free = compile_problem(d, None, p, caps=fd.capabilities)
     result = fd.solve(free.domain, free.problem, time_limit=20)
     assert free.map_plan(result.actions) == [("pick", ("e", "pe", "ge", "bq1", "aq0"))]
-    c = compile_problem(d, None, p, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    c = compile_problem(
+        d, None, p, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__
+    )
     result = fd.solve(c.domain, c.problem, time_limit=20)
     assert result.status == "solved", result.message
     plan = c.map_plan(result.actions)
@@ -95,7 +97,10 @@ def test_constrained_plan_forces_sequence_and_constants_and_maps_back():
 def test_repeated_free_variable_binds_consistently():
     d, p, c = _constrained()
     # Valid in the original domain (pick does not look at the arm conf)...
-    inconsistent = [("move", ("arm", "aq0", "at5", "aq7")), ("pick", ("d", "p9", "gd", "bq1", "aq8"))]
+    inconsistent = [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq8")),
+    ]
     assert validate_plan(d, p, inconsistent)[0]
     # ...but the constrained problem refuses aq8 for the aq2 already bound to aq7.
     steps = [(f"{n}-step{i}", a) for i, (n, a) in enumerate(inconsistent, 1)]
@@ -112,7 +117,9 @@ def test_constants_and_order_and_last_step_are_required():
     with pytest.raises(PlanInvalid):  # step 2 without step 1 (ssr-applied-1)
         plan_preimage(c.domain, c.problem, [("pick-step2", ("d", "p9", "gd", "bq1", "aq8"))])
     # Holding d some other way does not reach the goal without ssr-applied-2.
-    p2 = replace(c.problem, init=c.problem.init + (S.Atom("holding", (S.Const("d"), S.Const("gd"))),))
+    p2 = replace(
+        c.problem, init=c.problem.init + (S.Atom("holding", (S.Const("d"), S.Const("gd"))),)
+    )
     with pytest.raises(PlanInvalid):
         plan_preimage(c.domain, p2, [])
     with pytest.raises(PlanInvalid):
@@ -124,7 +131,12 @@ def test_changed_constant_makes_it_unsolvable():
     tail = [("move", ("arm", "aq1", "at1", "aq2")), ("pick", ("d", "p1", "gx", "bq1", "aq2"))]
     fd = get_planner("fd")
     c = compile_problem(
-        d, None, p, caps=fd.capabilities, plan_tail=tail, is_constant={"arm", "d", "gx"}.__contains__
+        d,
+        None,
+        p,
+        caps=fd.capabilities,
+        plan_tail=tail,
+        is_constant={"arm", "d", "gx"}.__contains__,
     )
     assert fd.solve(c.domain, c.problem, time_limit=20).status == "unsolvable"
 
@@ -132,7 +144,9 @@ def test_changed_constant_makes_it_unsolvable():
 def test_pyperplan_solves_the_constrained_problem_too():
     d, p = _task()
     pp = get_planner("pyperplan")
-    c = compile_problem(d, None, p, caps=pp.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    c = compile_problem(
+        d, None, p, caps=pp.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__
+    )
     result = pp.solve(c.domain, c.problem, time_limit=20)
     assert result.status == "solved", result.message
     assert c.map_plan(result.actions) == [

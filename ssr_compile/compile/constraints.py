@@ -109,20 +109,13 @@ def constrain_plan(
     )
     # The constants the new preconditions name must be domain constants: a domain may only
     # mention objects it declares (Fast Downward's translator refuses others).
-    used = {
-        value
-        for name, args in tail
-        for value in args
-        if is_constant(value)
-    }
+    used = {value for name, args in tail for value in args if is_constant(value)}
     known = {c.name for c in domain.constants}
     moved = tuple(o for o in problem.objects if o.name in used and o.name not in known)
     missing = used - known - {o.name for o in moved}
     # The free-variable objects appear in the actions too.
     free_objects = tuple(S.Typed(name) for name in free.values())
-    constants = (
-        domain.constants + moved + tuple(S.Typed(v) for v in sorted(missing)) + free_objects
-    )
+    constants = domain.constants + moved + tuple(S.Typed(v) for v in sorted(missing)) + free_objects
     new_domain = replace(new_domain, constants=constants)
     kept = tuple(o for o in problem.objects if o.name not in used)
     new_problem = replace(

@@ -96,7 +96,7 @@ def instantiate(
     is added); ``function_values`` maps a function name to its optimistic value;
     ``real_function_values`` gives evaluated function terms their real value.
     """
-    _refuse_unsupported(streams)
+    refuse_unsupported(streams)
     disabled = set(disabled) | set(exhausted)
     function_values = dict(function_values or {})
     real_function_values = dict(real_function_values or {})
@@ -226,7 +226,8 @@ def _fact_order(a: S.Atom):
     return (a.pred, tuple(t.name for t in a.args))
 
 
-def _refuse_unsupported(streams: S.StreamFile) -> None:
+def refuse_unsupported(streams: S.StreamFile) -> None:
+    """Raise :class:`UnsupportedError` (with line and column) for :fluents and :optimizer."""
     for s in streams.streams:
         if s.fluents:
             raise UnsupportedError(
