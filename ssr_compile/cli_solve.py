@@ -108,7 +108,11 @@ def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], dict]:
             )
         config = _folder_config(folder)
         if args.problem:
-            candidates = [folder / args.problem, folder / f"{args.problem}.pddl"]
+            candidates = [
+                folder / args.problem,
+                folder / f"{args.problem}.pddl",
+                folder / f"problem-{args.problem}.pddl",
+            ]
             problem = next((c for c in candidates if c.exists()), None)
             if problem is None:
                 raise SSRError(f"no problem '{args.problem}' in {folder}", file=str(folder))
@@ -154,10 +158,19 @@ def run(args: argparse.Namespace) -> int:
         )
         domain, streams, problem = load_inputs(ns, warnings)
         module = load_streams_module(module_spec)
-        module.check_against(streams, str(stream_path))
         seed_fn = getattr(module.module, "seed", None)
         if callable(seed_fn):
             seed_fn(args.seed)
+        factory = getattr(module.module, "for_problem", None)
+        if callable(factory):
+            # A module whose streams depend on the problem (a simulated world) binds them here.
+            try:
+                module = factory(problem_path, args.seed)
+            except (ValueError, OSError) as e:
+                raise SSRError(
+                    f"streams module '{module_spec}' cannot serve this problem: {e}"
+                ) from None
+        module.check_against(streams, str(stream_path))
         progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
         for w in warnings if args.verbose else ():
             print(w, file=sys.stderr)

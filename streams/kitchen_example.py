@@ -1,0 +1,58 @@
+"""The streams module of the folder ``domains/pddl/kitchen`` for ``ssr-compile solve``.
+
+The kitchen's streams need a PyBullet world, so this module binds them per problem: the
+folder's problem files (``problem-inspect.pddl``, ...) are the initial problems of the paper's
+tasks generated with seed 0 by :func:`sim.problem.task_problem`, and :func:`for_problem`
+rebuilds that task's world and returns :func:`streams.kitchen_module.make_module` for it.
+Regenerate the files with ``python -m streams.kitchen_example DIR``.
+"""
+
+from __future__ import annotations
+
+import atexit
+import sys
+from pathlib import Path
+
+import numpy as np
+
+STREAMS: dict = {}  # bound per problem by for_problem()
+TASK_SEED = 0
+TASKS = ("inspect", "stow", "swap", "cook")
+
+
+def task_name(problem_path: str | Path) -> str:
+    name = Path(problem_path).stem.removeprefix("problem-")
+    if name not in TASKS:
+        raise ValueError(f"{problem_path}: expected problem-<task>.pddl with a task among {TASKS}")
+    return name
+
+
+def for_problem(problem_path: str | Path, seed: int = 0):
+    """The streams module for one of the folder's problem files (``seed``: the streams' RNG)."""
+    from sim.problem import task_problem
+    from sim.tasks import make_task
+    from streams.kitchen_module import make_module
+
+    task = make_task(task_name(problem_path), TASK_SEED)
+    atexit.register(task.close)
+    _, values = task_problem(task)
+    return make_module(task, np.random.default_rng(seed), values)
+
+
+def problem_text(name: str) -> str:
+    from sim.problem import task_problem
+    from sim.tasks import make_task
+    from ssr_compile.printer import to_text
+
+    task = make_task(name, TASK_SEED)
+    try:
+        return to_text(task_problem(task)[0])
+    finally:
+        task.close()
+
+
+if __name__ == "__main__":  # pragma: no cover - a maintenance command
+    folder = Path(sys.argv[1] if len(sys.argv) > 1 else "domains/pddl/kitchen")
+    for name in TASKS:
+        (folder / f"problem-{name}.pddl").write_text(problem_text(name))
+        print(f"wrote {folder / f'problem-{name}.pddl'}")
