@@ -90,3 +90,26 @@ class Clock:
 
     def remaining(self) -> float:
         return max(0.0, self.limit - self.elapsed())
+
+
+def describe_variants(make, descriptions: dict[str, str]) -> list[dict]:
+    """Rows for ``ssr-compile planners``: one per variant, built with ``make(variant)``."""
+    rows = []
+    for variant, text in descriptions.items():
+        planner = make(variant)
+        rows.append(
+            {
+                "name": planner.name,
+                "planner": planner.name,
+                "capabilities": planner.capabilities.as_dict(),
+                "description": text,
+            }
+        )
+    return rows
+
+
+def over_bound(cost: float, cost_bound: float | None) -> str | None:
+    """Why a plan of ``cost`` is refused under ``cost_bound`` (plans must cost strictly less)."""
+    if cost_bound is not None and cost >= cost_bound:
+        return f"the plan found costs {cost:g}, not below the bound {cost_bound:g}"
+    return None

@@ -24,7 +24,17 @@ from pathlib import Path
 from ..printer import to_text
 from ..syntax import Domain, Problem
 from . import proc
-from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities, Clock, PlanResult
+from .base import (
+    ERROR,
+    SOLVED,
+    TIMEOUT,
+    UNSOLVABLE,
+    Capabilities,
+    Clock,
+    PlanResult,
+    describe_variants,
+    over_bound,
+)
 from .costs import fractional_costs, plan_cost
 from .features import unsupported
 
@@ -238,11 +248,9 @@ class FastDownward:
                 return result(ERROR, f"search failed with exit code {code}: {_log_tail(log)}")
             actions = read_plan(plan_path)
             cost = plan_cost(domain, problem, actions)
-            if cost_bound is not None and cost >= cost_bound:
-                return result(
-                    UNSOLVABLE,
-                    f"best plan found costs {cost:g}, not below the bound {cost_bound:g}",
-                )
+            refused = over_bound(cost, cost_bound)
+            if refused:
+                return result(UNSOLVABLE, refused)
             return result(SOLVED, "", actions, cost)
         except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
             return result(ERROR, f"{type(e).__name__}: {e}")
@@ -275,18 +283,7 @@ _DESCRIPTIONS = {
 
 
 def describe() -> list[dict]:
-    rows = []
-    for search, text in _DESCRIPTIONS.items():
-        planner = FastDownward(search)
-        rows.append(
-            {
-                "name": planner.name,
-                "planner": planner.name,
-                "capabilities": planner.capabilities.as_dict(),
-                "description": text,
-            }
-        )
-    return rows
+    return describe_variants(FastDownward, _DESCRIPTIONS)
 
 
 make_planner.describe = describe

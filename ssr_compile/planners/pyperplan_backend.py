@@ -18,7 +18,16 @@ from .. import syntax as S
 from ..errors import SSRError
 from ..printer import to_text
 from . import proc
-from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities, Clock, PlanResult
+from .base import (
+    ERROR,
+    SOLVED,
+    TIMEOUT,
+    UNSOLVABLE,
+    Capabilities,
+    Clock,
+    PlanResult,
+    describe_variants,
+)
 from .costs import plan_cost
 from .features import unsupported
 from .rename import rename_task
@@ -117,10 +126,9 @@ class Pyperplan:
                 return result(UNSOLVABLE, "pyperplan's search found no plan")
             actions = renaming.plan_back([(step[0], tuple(step[1:])) for step in value])
             cost = plan_cost(domain, problem, actions)
-            if cost_bound is not None and cost >= cost_bound:
-                return result(
-                    UNSOLVABLE, f"plan found costs {cost:g}, not below the bound {cost_bound:g}"
-                )
+            refused = over_bound(cost, cost_bound)
+            if refused:
+                return result(UNSOLVABLE, refused)
             return result(SOLVED, "", actions, cost)
         except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
             return result(ERROR, f"{type(e).__name__}: {e}")
@@ -143,18 +151,7 @@ _DESCRIPTIONS = {
 
 
 def describe() -> list[dict]:
-    rows = []
-    for search, text in _DESCRIPTIONS.items():
-        planner = Pyperplan(search)
-        rows.append(
-            {
-                "name": planner.name,
-                "planner": planner.name,
-                "capabilities": planner.capabilities.as_dict(),
-                "description": text,
-            }
-        )
-    return rows
+    return describe_variants(Pyperplan, _DESCRIPTIONS)
 
 
 make_planner.describe = describe

@@ -19,7 +19,16 @@ from ..errors import SSRError
 from ..printer import to_text
 from ..syntax import Domain, Problem
 from . import proc
-from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities, Clock, PlanResult
+from .base import (
+    ERROR,
+    SOLVED,
+    TIMEOUT,
+    UNSOLVABLE,
+    Capabilities,
+    Clock,
+    PlanResult,
+    over_bound,
+)
 from .costs import plan_cost
 from .features import unsupported
 from .rename import rename_task
@@ -160,11 +169,9 @@ class UnifiedPlanning:
                 return result(mapped, why)
             actions = renaming.plan_back(actions or [])
             cost = plan_cost(domain, problem, actions)
-            if cost_bound is not None and cost >= cost_bound:
-                return result(
-                    UNSOLVABLE,
-                    f"plan found costs {cost:g}, not below the bound {cost_bound:g}",
-                )
+            refused = over_bound(cost, cost_bound)
+            if refused:
+                return result(UNSOLVABLE, refused)
             return result(SOLVED, "", actions, cost)
         except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
             return result(ERROR, f"{type(e).__name__}: {e}")
