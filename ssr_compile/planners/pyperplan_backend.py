@@ -27,6 +27,7 @@ from .base import (
     Clock,
     PlanResult,
     describe_variants,
+    over_bound,
 )
 from .costs import plan_cost
 from .features import unsupported
