@@ -44,6 +44,11 @@ def _write_png(output: str, draw) -> str:
 def _configure_render(p: argparse.ArgumentParser) -> None:
     _task_args(p)
     p.add_argument(
+        "--gui",
+        action="store_true",
+        help="also open PyBullet's window on the scene (needs a display) until it is closed",
+    )
+    p.add_argument(
         "--view",
         choices=("camera", "top"),
         default="camera",
@@ -58,7 +63,30 @@ def run_render(args: argparse.Namespace) -> int:
         args.output, lambda tmp: render_task(args.task, args.seed, tmp, view=args.view)
     )
     print(f"wrote {path} ({args.task}, seed {args.seed}, {args.view} view)")
+    if args.gui:
+        _show(args.task, args.seed)
     return 0
+
+
+def _show(task_name: str, seed: int) -> None:
+    """Keep a GUI window on the task's scene until the user closes it (or presses Ctrl-C)."""
+    import time
+
+    import pybullet as p
+
+    from sim.tasks import make_task
+
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise SSRError("--gui needs a display (DISPLAY is not set); the PNG was written")
+    task = make_task(task_name, seed, gui=True)
+    print("showing the scene; close the window or press Ctrl-C to quit")
+    try:
+        while p.isConnected(task.world.client):
+            time.sleep(0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        task.close()
 
 
 def _configure_belief_plot(p: argparse.ArgumentParser) -> None:
