@@ -23,7 +23,7 @@ sys.path.insert(0, str(ROOT))
 
 from ssr_compile.focused import solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
-from ssr_compile.stream import load_streams_module  # noqa: E402
+from ssr_compile.stream import module_for_problem  # noqa: E402
 
 FIXTURES = {
     "pp1d (fixture)": (
@@ -49,10 +49,7 @@ def run_once(folder: Path, config: dict, problem: str, defer: bool, time_limit: 
     d = parse_domain((folder / "domain.pddl").read_text())
     s = parse_stream_file((folder / "stream.pddl").read_text())
     p = parse_problem((folder / problem).read_text())
-    module = load_streams_module(config["streams"], search=[ROOT])
-    seed = getattr(module.module, "seed", None)
-    if callable(seed):
-        seed(0)
+    module = module_for_problem(config["streams"], folder / problem, 0, search=[ROOT])
     start = time.perf_counter()
     sol = solve(
         d,

@@ -137,7 +137,7 @@ def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], dict]:
 def run(args: argparse.Namespace) -> int:
     from .cli_compile import load_inputs
     from .focused import print_solution, solve
-    from .stream import load_streams_module
+    from .stream import module_for_problem
 
     jobs, config = jobs_from_args(args)
     module_spec = args.streams or config.get("streams")
@@ -157,19 +157,7 @@ def run(args: argparse.Namespace) -> int:
             domain=str(domain_path), stream=str(stream_path), problem=str(problem_path)
         )
         domain, streams, problem = load_inputs(ns, warnings)
-        module = load_streams_module(module_spec)
-        seed_fn = getattr(module.module, "seed", None)
-        if callable(seed_fn):
-            seed_fn(args.seed)
-        factory = getattr(module.module, "for_problem", None)
-        if callable(factory):
-            # A module whose streams depend on the problem (a simulated world) binds them here.
-            try:
-                module = factory(problem_path, args.seed)
-            except (ValueError, OSError) as e:
-                raise SSRError(
-                    f"streams module '{module_spec}' cannot serve this problem: {e}"
-                ) from None
+        module = module_for_problem(module_spec, problem_path, args.seed)
         module.check_against(streams, str(stream_path))
         progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
         for w in warnings if args.verbose else ():

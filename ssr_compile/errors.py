@@ -31,7 +31,12 @@ class SSRError(Exception):
 
     @property
     def location(self) -> str:
-        parts = [self.file or "ssr-compile"]
+        if self.file is None:
+            # No file to name (an API call on trees built in code): say where, if known.
+            if self.line is None:
+                return "ssr-compile"
+            return f"ssr-compile (line {self.line}" + (f", column {self.col})" if self.col else ")")
+        parts = [self.file]
         if self.line is not None:
             parts.append(str(self.line))
             if self.col is not None:

@@ -141,6 +141,28 @@ def load_streams_module(spec: str, *, search: list[Path] | None = None) -> Strea
     return from_module(module, spec)
 
 
+def module_for_problem(
+    spec: str, problem_path: str | Path, seed: int = 0, *, search: list[Path] | None = None
+) -> StreamsModule:
+    """The streams module ``spec`` made ready for one problem.
+
+    The module's optional ``seed(n)`` is called first; a module whose streams depend on the
+    problem (a simulated world built per task) provides ``for_problem(path, seed)`` returning
+    the :class:`StreamsModule` to use.
+    """
+    module = load_streams_module(spec, search=search)
+    seed_fn = getattr(module.module, "seed", None)
+    if callable(seed_fn):
+        seed_fn(seed)
+    factory = getattr(module.module, "for_problem", None)
+    if callable(factory):
+        try:
+            module = factory(problem_path, seed)
+        except (ValueError, OSError) as e:
+            raise StreamError(f"streams module '{spec}' cannot serve {problem_path}: {e}") from None
+    return module
+
+
 def from_module(module, name: str | None = None) -> StreamsModule:
     """Read ``STREAMS``, ``STREAM_INFO`` and ``VALUES`` from an imported module (or object)."""
     name = name or getattr(module, "__name__", "streams")
