@@ -334,7 +334,7 @@ def test_fluents_and_optimizers_are_unsupported_with_a_position(text, word, line
     with pytest.raises(UnsupportedError) as e:
         compile_problem(d, parse_stream_file(text), p)
     assert word in str(e.value) and e.value.line == line and e.value.col is not None
-    assert str(e.value).startswith(f"ssr-compile:{line}:{e.value.col}:")
+    assert str(e.value).startswith(f"ssr-compile (line {line}, column {e.value.col}):")
 
 
 # ---------------------------------------------------------------- derived predicates
