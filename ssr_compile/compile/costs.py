@@ -75,7 +75,12 @@ def compile_costs(
     if unit_cost:
         actions = tuple(replace(a, effect=_drop_costs(a.effect)) for a in domain.actions)
         init = tuple(f for f in problem.init if not isinstance(f, S.InitValue))
-        functions = tuple(f for f in domain.functions if f.name != TOTAL_COST.name)
+        # Functions that only priced actions are gone with the costs; declared without values
+        # they would read as undefined numeric fluents.
+        used = _function_names(actions)
+        functions = tuple(
+            f for f in domain.functions if f.name != TOTAL_COST.name and f.name in used
+        )
         return (
             replace(domain, actions=actions, functions=functions),
             replace(problem, init=init, metric=None),
@@ -154,6 +159,42 @@ def compile_costs(
     )
     new_problem = replace(problem, init=tuple(init), metric=S.Metric("minimize", TOTAL_COST))
     return new_domain, new_problem, scale
+
+
+def _function_names(actions) -> set[str]:
+    """Functions mentioned by numeric conditions or effects of ``actions``."""
+    out: set[str] = set()
+
+    def visit(x):
+        if isinstance(x, S.FuncTerm):
+            out.add(x.name)
+        elif isinstance(x, S.Compare):
+            visit(x.left)
+            visit(x.right)
+        elif isinstance(x, S.NumericEffect):
+            visit(x.fluent)
+            visit(x.value)
+        elif isinstance(x, S.Arith):
+            for a in x.args:
+                visit(a)
+        elif isinstance(x, S.And | S.Or):
+            for a in x.args:
+                visit(a)
+        elif isinstance(x, S.Not):
+            visit(x.arg)
+        elif isinstance(x, S.Imply):
+            visit(x.left)
+            visit(x.right)
+        elif isinstance(x, S.Exists | S.Forall):
+            visit(x.body)
+        elif isinstance(x, S.When):
+            visit(x.condition)
+            visit(x.effect)
+
+    for a in actions:
+        visit(a.precondition)
+        visit(a.effect)
+    return out
 
 
 def _guard(name: str) -> str:

@@ -32,6 +32,7 @@ Plan = list[tuple[str, tuple[str, ...]]]
 MAX_EXPANSION = 200_000
 GOAL_ACTION = "ssr-goal"
 GOAL_REACHED = S.Atom("ssr-goal-reached")
+DISTINCT = "ssr-distinct"
 
 
 @dataclass
@@ -334,15 +335,15 @@ def remove_negations(domain: S.Domain, problem: S.Problem, templates):
     for lit in S.conjuncts(problem.goal):
         if isinstance(lit, S.Not) and isinstance(lit.arg, S.Atom):
             negated.add(lit.arg.pred)
-    if "=" in negated:
-        raise UnsupportedError(
-            "negated equality between variables needs a planner with negative preconditions"
-        )
     if not negated:
         return replace(domain, actions=tuple(actions)), problem, templates
 
+    def neg_name(pred: str) -> str:
+        # (not (= ?a ?b)) reads (ssr-distinct ?a ?b), true of every pair of distinct objects.
+        return DISTINCT if pred == "=" else f"not-{pred}"
+
     def neg(atom: S.Atom) -> S.Atom:
-        return S.Atom(f"not-{atom.pred}", atom.args)
+        return S.Atom(neg_name(atom.pred), atom.args)
 
     def positive_pre(f):
         parts = []
@@ -373,7 +374,7 @@ def remove_negations(domain: S.Domain, problem: S.Problem, templates):
     extra_init: list[S.Atom] = []
     for pred in sorted(negated):
         decl = decls.get(pred)
-        arity = len(decl.params) if decl else _arity(pred, init_true, actions)
+        arity = 2 if pred == "=" else len(decl.params) if decl else _arity(pred, init_true, actions)
         types = [p.type for p in decl.params] if decl else [None] * arity
         combos = itertools.product(*(of_type(t) for t in types))
         count = 0
@@ -385,10 +386,17 @@ def remove_negations(domain: S.Domain, problem: S.Problem, templates):
                     "with negative preconditions"
                 )
             atom = S.Atom(pred, tuple(S.Const(c) for c in combo))
-            if atom not in init_true:
+            if pred == "=":
+                if combo[0] != combo[1]:
+                    extra_init.append(neg(atom))
+            elif atom not in init_true:
                 extra_init.append(neg(atom))
     predicates = list(domain.predicates) + [
-        S.PredicateDecl(f"not-{p}", decls[p].params if p in decls else ()) for p in sorted(negated)
+        S.PredicateDecl(
+            neg_name(p),
+            (S.Typed("?a"), S.Typed("?b")) if p == "=" else decls[p].params if p in decls else (),
+        )
+        for p in sorted(negated)
     ]
     goal = positive_pre(problem.goal) if problem.goal is not None else None
     return (

@@ -60,12 +60,20 @@ def oneshot_engines() -> dict[str, type]:
 
 
 def engine_capabilities(cls) -> Capabilities:
-    """What an engine class supports, read from its declared problem kind."""
+    """What an engine supports natively, read from its declared problem kind.
+
+    ssr-compile's lowering removes what the engine lacks before the task is written (its
+    splitting refuses, with a clear message, tasks whose normal form would explode, where
+    unified-planning's compilers would grind until the time limit); whatever the PDDL reader
+    still finds unsupported — equality for pyperplan, say — is removed by unified-planning's
+    own compilers (:func:`_fit_to_engine`).  Axioms are left to the lowering: the reader does
+    not read ``:derived``.
+    """
     kind = cls.supported_kind()
     has = kind.features.__contains__
     return Capabilities(
         costs=has("ACTIONS_COST") and has("INT_NUMBERS_IN_ACTIONS_COST"),
-        axioms=False,  # unified-planning's PDDL reader does not read :derived
+        axioms=False,
         negative_preconditions=has("NEGATIVE_CONDITIONS"),
         disjunction=has("DISJUNCTIVE_CONDITIONS"),
         quantifiers=has("EXISTENTIAL_CONDITIONS")
@@ -74,6 +82,49 @@ def engine_capabilities(cls) -> Capabilities:
         conditional_effects=has("CONDITIONAL_EFFECTS"),
         optimal=_optimal(cls),
     )
+
+
+# unified-planning compilers, in the order they are applied, with the problem-kind features
+# each one removes.
+_COMPILERS = (
+    ("QUANTIFIERS_REMOVING", ("EXISTENTIAL_CONDITIONS", "UNIVERSAL_CONDITIONS", "FORALL_EFFECTS")),
+    ("CONDITIONAL_EFFECTS_REMOVING", ("CONDITIONAL_EFFECTS",)),
+    ("DISJUNCTIVE_CONDITIONS_REMOVING", ("DISJUNCTIVE_CONDITIONS",)),
+    ("NEGATIVE_CONDITIONS_REMOVING", ("NEGATIVE_CONDITIONS",)),
+)
+
+
+def _fit_to_engine(task, engine_cls):
+    """Apply unified-planning's compilers until the engine supports the task.
+
+    Returns the compiled task and the map-back functions (last compiler first), which turn the
+    engine's action instances back into the original task's.
+    """
+    from unified_planning.engines import CompilationKind
+    from unified_planning.exceptions import UPException
+    from unified_planning.shortcuts import Compiler
+
+    map_backs = []
+    supported = engine_cls.supported_kind().features
+    steps = [
+        getattr(CompilationKind, name)
+        for name, features in _COMPILERS
+        if any(f in task.kind.features and f not in supported for f in features)
+    ]
+    steps.append(CompilationKind.GROUNDING)  # last resort: equality, for instance
+    for kind in steps:
+        if engine_cls.supports(task.kind):
+            break
+        try:
+            with Compiler(problem_kind=task.kind, compilation_kind=kind) as compiler:
+                res = compiler.compile(task, kind)
+        except UPException:
+            # No compiler takes this task (undefined static cost values, say): let the engine
+            # try it as it is, which is what it would have been given without this step.
+            break
+        task = res.problem
+        map_backs.insert(0, res.map_back_action_instance)
+    return task, map_backs
 
 
 def _optimal(cls) -> bool:
@@ -92,10 +143,15 @@ def _solve_in_child(domain_path: str, problem_path: str, engine: str, params, ti
 
     _environment()
     task = PDDLReader().parse_problem(domain_path, problem_path)
+    task, map_backs = _fit_to_engine(task, oneshot_engines()[engine])
     with OneshotPlanner(name=engine, params=params or None) as planner:
         res = planner.solve(task, timeout=timeout)
     actions = None
     if res.plan is not None:
+        plan = res.plan
+        for back in map_backs:
+            plan = plan.replace_action_instances(back)
+        res = res.__class__(res.status, plan, res.engine_name, res.metrics, res.log_messages)
         actions = [
             (a.action.name, tuple(p.object().name for p in a.actual_parameters))
             for a in res.plan.actions
