@@ -7,7 +7,6 @@ its derived predicate compiled away gives every hand-written plan the same valid
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -369,9 +368,6 @@ def test_costs_make_the_trade_off(grounded):
 
 # ------------------------------------------------------------------ (c) the Focused solver
 
-HAS_FOCUSED = importlib.util.find_spec("ssr_compile.focused") is not None
-
-
 def solve_example(which: str, planner: str = "fd:opt"):
     from ssr_compile.focused import solve
 
@@ -388,7 +384,6 @@ def solve_example(which: str, planner: str = "fd:opt"):
     )
 
 
-@pytest.mark.skipif(not HAS_FOCUSED, reason="ssr_compile.focused is not there yet")
 @pytest.mark.parametrize("planner", ["fd", "fd:opt"])
 def test_focused_moves_an_occluder_before_detecting(planner):
     sol = solve_example("occluded", planner)
@@ -404,7 +399,6 @@ def test_focused_moves_an_occluder_before_detecting(planner):
     assert sol.cost == pytest.approx(6.05, abs=0.01)
 
 
-@pytest.mark.skipif(not HAS_FOCUSED, reason="ssr_compile.focused is not there yet")
 @pytest.mark.parametrize("planner", ["fd", "fd:opt"])
 def test_focused_detects_directly_when_clear(planner):
     sol = solve_example("clear", planner)
@@ -414,7 +408,6 @@ def test_focused_detects_directly_when_clear(planner):
     assert sol.cost == pytest.approx(4.05, abs=0.01)
 
 
-@pytest.mark.skipif(not HAS_FOCUSED, reason="ssr_compile.focused is not there yet")
 def test_cli_solve_reads_example_toml(capsys):
     from ssr_compile.cli import main
 
