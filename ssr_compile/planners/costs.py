@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from .. import syntax as S
 from ..errors import UnsupportedError
-from .base import GroundAction
+from .base import SOLVED, UNSOLVABLE, GroundAction, over_bound
 
 
 def plan_cost(domain: S.Domain, problem: S.Problem, actions: list[GroundAction]) -> float:
@@ -77,3 +77,15 @@ def _value(e, binding: dict[str, str], values: dict) -> float:
             out = {"+": out + x, "-": out - x, "*": out * x, "/": out / x}[e.op]
         return out
     raise UnsupportedError(f"cannot evaluate cost expression {e!r}")
+
+
+def priced(result, domain: S.Domain, problem: S.Problem, actions: list[GroundAction], cost_bound):
+    """The answer for a plan a backend found: its cost, refused when not below ``cost_bound``.
+
+    ``result(status, message, actions, cost)`` builds the backend's :class:`PlanResult`.
+    """
+    cost = plan_cost(domain, problem, actions)
+    refused = over_bound(cost, cost_bound)
+    if refused:
+        return result(UNSOLVABLE, refused)
+    return result(SOLVED, "", actions, cost)

@@ -26,16 +26,14 @@ from ..syntax import Domain, Problem
 from . import proc
 from .base import (
     ERROR,
-    SOLVED,
     TIMEOUT,
     UNSOLVABLE,
     Capabilities,
     Clock,
     PlanResult,
     describe_variants,
-    over_bound,
 )
-from .costs import fractional_costs, plan_cost
+from .costs import fractional_costs, priced
 from .features import unsupported
 
 # Search configurations; ``{bound}`` receives ``,bound=N`` when a cost bound is given.
@@ -247,11 +245,7 @@ class FastDownward:
             if code != 0 or plan_path is None:
                 return result(ERROR, f"search failed with exit code {code}: {_log_tail(log)}")
             actions = read_plan(plan_path)
-            cost = plan_cost(domain, problem, actions)
-            refused = over_bound(cost, cost_bound)
-            if refused:
-                return result(UNSOLVABLE, refused)
-            return result(SOLVED, "", actions, cost)
+            return priced(result, domain, problem, actions, cost_bound)
         except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
             return result(ERROR, f"{type(e).__name__}: {e}")
         finally:

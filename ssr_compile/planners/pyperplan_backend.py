@@ -20,16 +20,14 @@ from ..printer import to_text
 from . import proc
 from .base import (
     ERROR,
-    SOLVED,
     TIMEOUT,
     UNSOLVABLE,
     Capabilities,
     Clock,
     PlanResult,
     describe_variants,
-    over_bound,
 )
-from .costs import plan_cost
+from .costs import priced
 from .features import unsupported
 from .rename import rename_task
 
@@ -126,11 +124,7 @@ class Pyperplan:
             if value is None:
                 return result(UNSOLVABLE, "pyperplan's search found no plan")
             actions = renaming.plan_back([(step[0], tuple(step[1:])) for step in value])
-            cost = plan_cost(domain, problem, actions)
-            refused = over_bound(cost, cost_bound)
-            if refused:
-                return result(UNSOLVABLE, refused)
-            return result(SOLVED, "", actions, cost)
+            return priced(result, domain, problem, actions, cost_bound)
         except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
             return result(ERROR, f"{type(e).__name__}: {e}")
         finally:

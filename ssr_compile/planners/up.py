@@ -27,9 +27,8 @@ from .base import (
     Capabilities,
     Clock,
     PlanResult,
-    over_bound,
 )
-from .costs import plan_cost
+from .costs import priced
 from .features import unsupported
 from .rename import rename_task
 
@@ -224,11 +223,7 @@ class UnifiedPlanning:
                     why += ": " + " ".join(log.split())[-300:]
                 return result(mapped, why)
             actions = renaming.plan_back(actions or [])
-            cost = plan_cost(domain, problem, actions)
-            refused = over_bound(cost, cost_bound)
-            if refused:
-                return result(UNSOLVABLE, refused)
-            return result(SOLVED, "", actions, cost)
+            return priced(result, domain, problem, actions, cost_bound)
         except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
             return result(ERROR, f"{type(e).__name__}: {e}")
         finally:
