@@ -124,29 +124,7 @@ def _stream_file_predicates(f: S.StreamFile) -> dict[str, int]:
 
 def atoms(f) -> list[S.Atom]:
     """Every atom in a formula or effect (in order)."""
-    out: list[S.Atom] = []
-
-    def visit(x):
-        if isinstance(x, S.Atom):
-            out.append(x)
-        elif isinstance(x, (S.And, S.Or)):
-            for a in x.args:
-                visit(a)
-        elif isinstance(x, S.Not):
-            visit(x.arg)
-        elif isinstance(x, S.Imply):
-            visit(x.left)
-            visit(x.right)
-        elif isinstance(x, (S.Exists, S.Forall)):
-            visit(x.body)
-        elif isinstance(x, S.When):
-            visit(x.condition)
-            visit(x.effect)
-        elif isinstance(x, S.Timed):
-            visit(x.body)
-
-    visit(f)
-    return out
+    return [x for x in S.walk(f) if isinstance(x, S.Atom)]
 
 
 # ---------------------------------------------------------------- formulas

@@ -403,5 +403,35 @@ def conjuncts(f: Formula | None) -> tuple[Formula, ...]:
     return (f,)
 
 
+def children(node) -> tuple:
+    """The direct sub-nodes of a formula, effect or numeric expression (terms included)."""
+    if isinstance(node, Atom | FuncTerm | Arith | And | Or):
+        return node.args
+    if isinstance(node, Not):
+        return (node.arg,)
+    if isinstance(node, Imply):
+        return (node.left, node.right)
+    if isinstance(node, Exists | Forall | Timed):
+        return (node.body,)
+    if isinstance(node, Compare):
+        return (node.left, node.right)
+    if isinstance(node, When):
+        return (node.condition, node.effect)
+    if isinstance(node, NumericEffect):
+        return (node.fluent, node.value)
+    return ()
+
+
+def walk(node):
+    """Every node of a formula in pre-order (``None`` gives nothing)."""
+    if node is None:
+        return
+    stack = [node]
+    while stack:
+        x = stack.pop()
+        yield x
+        stack.extend(reversed(children(x)))
+
+
 def names(typed: tuple[Typed, ...]) -> tuple[str, ...]:
     return tuple(t.name for t in typed)

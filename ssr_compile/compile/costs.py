@@ -163,38 +163,13 @@ def compile_costs(
 
 def _function_names(actions) -> set[str]:
     """Functions mentioned by numeric conditions or effects of ``actions``."""
-    out: set[str] = set()
-
-    def visit(x):
-        if isinstance(x, S.FuncTerm):
-            out.add(x.name)
-        elif isinstance(x, S.Compare):
-            visit(x.left)
-            visit(x.right)
-        elif isinstance(x, S.NumericEffect):
-            visit(x.fluent)
-            visit(x.value)
-        elif isinstance(x, S.Arith):
-            for a in x.args:
-                visit(a)
-        elif isinstance(x, S.And | S.Or):
-            for a in x.args:
-                visit(a)
-        elif isinstance(x, S.Not):
-            visit(x.arg)
-        elif isinstance(x, S.Imply):
-            visit(x.left)
-            visit(x.right)
-        elif isinstance(x, S.Exists | S.Forall):
-            visit(x.body)
-        elif isinstance(x, S.When):
-            visit(x.condition)
-            visit(x.effect)
-
-    for a in actions:
-        visit(a.precondition)
-        visit(a.effect)
-    return out
+    return {
+        x.name
+        for a in actions
+        for part in (a.precondition, a.effect)
+        for x in S.walk(part)
+        if isinstance(x, S.FuncTerm)
+    }
 
 
 def _guard(name: str) -> str:

@@ -137,21 +137,7 @@ def dnf(f, limit: int = 4096) -> list[list]:
 
 def has(f, *types) -> bool:
     """Does the formula contain a node of one of ``types``?"""
-    if isinstance(f, types):
-        return True
-    if isinstance(f, S.Not):
-        return has(f.arg, *types)
-    if isinstance(f, S.And | S.Or):
-        return any(has(a, *types) for a in f.args)
-    if isinstance(f, S.Imply):
-        return has(f.left, *types) or has(f.right, *types)
-    if isinstance(f, S.Exists | S.Forall):
-        return has(f.body, *types)
-    if isinstance(f, S.When):
-        return has(f.condition, *types) or has(f.effect, *types)
-    if isinstance(f, S.Timed):
-        return has(f.body, *types)
-    return False
+    return any(isinstance(x, types) for x in S.walk(f))
 
 
 def fresh_vars(params: tuple[S.Typed, ...], taken: set[str], tag: str) -> dict[str, S.Var]:
@@ -172,37 +158,9 @@ def fresh_vars(params: tuple[S.Typed, ...], taken: set[str], tag: str) -> dict[s
 def variables_in(f) -> set[str]:
     """All variable names occurring in a formula (bound or free)."""
     out: set[str] = set()
-
-    def visit(x):
+    for x in S.walk(f):
         if isinstance(x, S.Var):
             out.add(x.name)
-        elif isinstance(x, S.Atom | S.FuncTerm):
-            out.update(a.name for a in x.args if isinstance(a, S.Var))
-        elif isinstance(x, S.Arith):
-            for a in x.args:
-                visit(a)
-        elif isinstance(x, S.Not):
-            visit(x.arg)
-        elif isinstance(x, S.And | S.Or):
-            for a in x.args:
-                visit(a)
-        elif isinstance(x, S.Imply):
-            visit(x.left)
-            visit(x.right)
         elif isinstance(x, S.Exists | S.Forall):
             out.update(p.name for p in x.params)
-            visit(x.body)
-        elif isinstance(x, S.Compare):
-            visit(x.left)
-            visit(x.right)
-        elif isinstance(x, S.When):
-            visit(x.condition)
-            visit(x.effect)
-        elif isinstance(x, S.NumericEffect):
-            visit(x.fluent)
-            visit(x.value)
-        elif isinstance(x, S.Timed):
-            visit(x.body)
-
-    visit(f)
     return out
