@@ -21,9 +21,9 @@ import pybullet as p
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from streams.belief import ObservationModel, PoseBelief, Surface, update  # noqa: E402
-from streams.belief_obs import blocking_bodies, sample_obs  # noqa: E402
-from streams.visibility import PyBulletCamera  # noqa: E402
+from ssr_compile.belief.observation import blocking_bodies, sample_obs  # noqa: E402
+from ssr_compile.belief.particles import ObservationModel, PoseBelief, Surface, update  # noqa: E402
+from ssr_compile.belief.visibility import PyBulletCamera  # noqa: E402
 
 TABLE = Surface("table", (2.0, 0.0), (0.5, 0.6), 0.0)
 HALF = (0.04, 0.04, 0.06)
@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> None:
     started = time.perf_counter()
 
     print(f"belief layer benchmark (medians of {repeats} runs, seed {args.seed})\n")
-    print("Bayesian update (streams.belief.update), all particles visible")
+    print("Bayesian update (ssr_compile.belief.particles.update), all particles visible")
     print(f"{'N':>7} | {'detect ms':>10} | {'miss ms':>8} | {'reinvig ms':>10}")
     for n in sizes:
         pb = PoseBelief.uniform("o", [TABLE], n, rng, z_offset=HALF[2])

@@ -2,7 +2,7 @@
 
 Usage: python bench/parse_bench.py [DIR] [--runs N]
 
-Parses every .pddl file under DIR (default: the pddlstream example corpus in /work/shared when
+Parses every .pddl file under DIR (default: the pddlstream example corpus in ../shared/corpus beside the repository when
 it is there) and prints files/s and MB/s, the median of N runs (default 5).  Both parsers are
 built once before timing and read texts already in memory, so only parsing is timed.
 
@@ -24,7 +24,7 @@ from pathlib import Path
 from ssr_compile.errors import SSRError
 from ssr_compile.parse import parse_text, parser
 
-DEFAULT = Path("/work/shared/corpus/pddlstream-examples")
+DEFAULT = Path(__file__).resolve().parent.parent.parent / "shared" / "corpus" / "pddlstream-examples"
 
 
 def median_time(fn: Callable[[], object], runs: int) -> float:

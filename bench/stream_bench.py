@@ -8,11 +8,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
-from sim.perception import visible_fraction
-from sim.robot import ARM_TUCK
-from sim.world import PARK_BASE, World
-from streams.kitchen import KitchenStreams
+from ssr_compile.sim.perception import visible_fraction
+from ssr_compile.sim.robot import ARM_TUCK
+from ssr_compile.sim.samplers import KitchenStreams
+from ssr_compile.sim.world import PARK_BASE, World
 
 N = 20
 

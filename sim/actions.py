@@ -1,6 +1,6 @@
 """Actions of the kitchen domain and their execution in the simulator (paper §IV, §VIII).
 
-Each action carries the trajectories computed by the streams (``streams.kitchen``);
+Each action carries the trajectories computed by the streams (``ssr_compile.sim.samplers``);
 :func:`execute` plays it in the world: base motions land with Gaussian noise, arm trajectories
 are followed (stopping before a collision), pick attaches the object to the hand, place
 releases it onto the support underneath, pull/push move a drawer together with its contents
@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim.geometry import Pose, invert, multiply, wrap_angle
-from sim.world import DRAWER_TRAVEL, ExecutionError, World
+from .geometry import Pose, invert, multiply, wrap_angle
+from .world import DRAWER_TRAVEL, ExecutionError, World
 
 Conf = tuple[float, ...]
 

@@ -1,19 +1,20 @@
 """The fixed camera's detector (paper §III, §V-B): detects each visible object, misses it with
 probability ``p_fn``, and reports its pose with Gaussian noise; never a true pose.
 
-Visibility is decided by ray casts (``streams.visibility.PyBulletCamera``) from the camera's eye
+Visibility is decided by ray casts (``ssr_compile.belief.visibility.PyBulletCamera``) from the camera's eye
 to several points of the object; everything else in the scene occludes (other objects, the
 cabinet and its drawers, the stove, the robot).  The noise model is
-``streams.belief.ObservationModel`` (``p_fn``, covariance over ``(x, y, z, yaw)``).
+``ssr_compile.belief.particles.ObservationModel`` (``p_fn``, covariance over ``(x, y, z, yaw)``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from sim.geometry import multiply, pose, yaw_of
-from sim.world import World
-from streams.belief import ObservationModel
+from ssr_compile.belief.particles import ObservationModel
+
+from .geometry import multiply, pose, yaw_of
+from .world import World
 
 #: An object is visible when at least this fraction of its sample points is visible.
 VISIBLE_FRACTION = 0.5

@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.robot import ARM_CARRY, ARM_TUCK
-from sim.tasks import Task
-from sim.world import DRAWER_TRAVEL, DRAWERS, PLACE_GAP, World
 from ssr_compile import syntax as S
-from streams.belief import PoseBelief, Surface
+from ssr_compile.belief.particles import PoseBelief, Surface
+
+from .robot import ARM_CARRY, ARM_TUCK
+from .tasks import Task
+from .world import DRAWER_TRAVEL, DRAWERS, PLACE_GAP, World
 
 DOMAIN = "kitchen"
 PARTICLES_PER_SURFACE = 100

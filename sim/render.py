@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pybullet as p
 
-from sim.tasks import make_task
-from sim.world import World
+from .tasks import make_task
+from .world import World
 
 WIDTH, HEIGHT = 640, 480
 TOP_EYE = (0.45, 0.0, 4.0)

@@ -20,7 +20,7 @@ import numpy as np
 import pybullet as p
 import pybullet_data
 
-from sim.geometry import Pose, angle_between, invert, multiply, pose, pose2d, quat_inv, quat_mul
+from .geometry import Pose, angle_between, invert, multiply, pose, pose2d, quat_inv, quat_mul
 
 PANDA_URDF = os.path.join(pybullet_data.getDataPath(), "franka_panda", "panda.urdf")
 

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.actions import Action, BaseNoise, MoveArm, MoveBase, Outcome, Pick, Place, Press, execute
-from sim.perception import observe
-from sim.robot import ARM_CARRY, ARM_TUCK
-from sim.world import PARK_BASE, ExecutionError, World
-from streams.belief import ObservationModel
-from streams.kitchen import Grasp, KitchenStreams, ObjPose
+from ssr_compile.belief.particles import ObservationModel
+
+from .actions import Action, BaseNoise, MoveArm, MoveBase, Outcome, Pick, Place, Press, execute
+from .perception import observe
+from .robot import ARM_CARRY, ARM_TUCK
+from .samplers import Grasp, KitchenStreams, ObjPose
+from .world import PARK_BASE, ExecutionError, World
 
 
 class Scripted:

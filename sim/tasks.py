@@ -22,10 +22,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim.perception import visible_fraction
-from sim.robot import ARM_TUCK
-from sim.world import DRAWER_TRAVEL, DRAWERS, PARK_BASE, World
-from streams.belief import Surface
+from ssr_compile.belief.particles import Surface
+
+from .perception import visible_fraction
+from .robot import ARM_TUCK
+from .world import DRAWER_TRAVEL, DRAWERS, PARK_BASE, World
 
 TASKS = ("inspect", "stow", "swap", "cook")
 Goal = tuple[tuple[str, ...], ...]
@@ -46,7 +47,7 @@ class Task:
         return goal_holds(self.goal, self.world.true_state() if state is None else state)
 
     def prior_surfaces(self) -> dict[str, list[tuple[Surface, float]]]:
-        """The prior with each surface as a ``streams.belief.Surface`` in the world frame (at
+        """The prior with each surface as a ``ssr_compile.belief.particles.Surface`` in the world frame (at
         the drawers' current openings)."""
         return {
             obj: [(belief_surface(self.world, s), w) for s, w in entries]
@@ -82,7 +83,7 @@ def belief_surface(world: World, surface: str) -> Surface:
 
 
 def _place_random(world: World, rng: np.random.Generator, obj: str, surface: str) -> None:
-    from streams.kitchen import KitchenStreams
+    from .samplers import KitchenStreams
 
     ks = KitchenStreams(world, rng, max_attempts=200)
     for (p,) in ks.sample_placements(obj, surface):
@@ -93,7 +94,7 @@ def _place_random(world: World, rng: np.random.Generator, obj: str, surface: str
 
 def _place_occluder(world: World, rng: np.random.Generator, box: str) -> bool:
     """Put ``box`` on the counter between the camera and the block, facing the camera."""
-    from streams.kitchen import KitchenStreams, ObjPose
+    from .samplers import KitchenStreams, ObjPose
 
     ks = KitchenStreams(world, rng)
     (bx, by, _), _ = world.object_pose("block")

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from sim.geometry import Pose, invert, multiply, pose, quat_from_yaw, yaw_of
-from sim.robot import ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, FINGER_OPEN, Robot
+from .geometry import Pose, invert, multiply, pose, quat_from_yaw, yaw_of
+from .robot import ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, FINGER_OPEN, Robot
 
 COUNTER_TOP = 0.70
 CABINET_FRONT = 0.8
@@ -535,9 +535,9 @@ class World:
     # -- camera -----------------------------------------------------------------------------------
     @property
     def camera(self):
-        """A ``streams.visibility.PyBulletCamera`` at the fixed camera's eye."""
+        """A ``ssr_compile.belief.visibility.PyBulletCamera`` at the fixed camera's eye."""
         if self._camera is None:
-            from streams.visibility import PyBulletCamera
+            from ssr_compile.belief.visibility import PyBulletCamera
 
             self._camera = PyBulletCamera(self.camera_eye, client=self.client)
         return self._camera

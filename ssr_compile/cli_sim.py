@@ -57,7 +57,7 @@ def _configure_render(p: argparse.ArgumentParser) -> None:
 
 
 def run_render(args: argparse.Namespace) -> int:
-    from sim.render import render_task
+    from ssr_compile.sim.render import render_task
 
     path = _write_png(
         args.output, lambda tmp: render_task(args.task, args.seed, tmp, view=args.view)
@@ -74,7 +74,7 @@ def _show(task_name: str, seed: int) -> None:
 
     import pybullet as p
 
-    from sim.tasks import make_task
+    from ssr_compile.sim.tasks import make_task
 
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise SSRError("--gui needs a display (DISPLAY is not set); the PNG was written")
@@ -100,9 +100,9 @@ def run_belief_plot(args: argparse.Namespace) -> int:
     """The prior pose beliefs of a task's objects, drawn like the paper's Fig. 3 (left)."""
     import numpy as np
 
-    from sim.tasks import make_task
-    from streams.belief import PoseBelief
-    from streams.belief_plot import plot_belief
+    from ssr_compile.belief.particles import PoseBelief
+    from ssr_compile.belief.plot import plot_belief
+    from ssr_compile.sim.tasks import make_task
 
     if args.particles < 1:
         raise SSRError("--particles must be at least 1")

@@ -28,7 +28,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--streams",
         metavar="MODULE",
-        help="streams module: import path (streams.tamp2d) or .py file",
+        help="streams module: import path (ssr_compile.streams.tamp2d) or .py file",
     )
     p.add_argument(
         "--problem",
@@ -79,7 +79,7 @@ def _folder_config(folder: Path) -> dict:
     config_file = folder / "example.toml"
     if not config_file.exists():
         raise SSRError(
-            f'no example.toml in {folder} (it names the streams module: streams = "streams.x")',
+            f'no example.toml in {folder} (it names the streams module: streams = "ssr_compile.streams.x")',
             file=str(folder),
         )
     try:

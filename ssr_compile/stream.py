@@ -106,7 +106,7 @@ class StreamsModule:
 
 
 def load_streams_module(spec: str, *, search: list[Path] | None = None) -> StreamsModule:
-    """Import a streams module by import path (``streams.tamp2d``) or file path (``x/y.py``)."""
+    """Import a streams module by import path (``ssr_compile.streams.tamp2d``) or file path (``x/y.py``)."""
     try:
         if spec.endswith(".py") or "/" in spec or Path(spec).exists():
             path = Path(spec)

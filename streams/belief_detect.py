@@ -39,9 +39,9 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from streams.belief import ObservationModel, PoseBelief, Surface
-from streams.belief_obs import Observation, ObsRegion, bvis, obs_cost, update_belief
-from streams.visibility import PyBulletCamera
+from ssr_compile.belief.observation import Observation, ObsRegion, bvis, obs_cost, update_belief
+from ssr_compile.belief.particles import ObservationModel, PoseBelief, Surface
+from ssr_compile.belief.visibility import PyBulletCamera
 
 # ----------------------------------------------------------------- parameters
 
@@ -174,7 +174,7 @@ def box_belief(name: str, x: float, y: float, surface: Surface = TABLE) -> PoseB
 def sample_obs(o: str, pb: PoseBelief) -> Iterator[tuple[Observation]]:
     """``sample-obs``: observations ``(z, X_i, eps)`` of ``o`` under ``pb`` (paper §V-B).
 
-    As :func:`streams.belief_obs.sample_obs` (``z = x_i`` for a particle ``x_i``, ``X_i`` the
+    As :func:`ssr_compile.belief.observation.sample_obs` (``z = x_i`` for a particle ``x_i``, ``X_i`` the
     positive-weight particles of its surface within ``DELTA``), but as a finite enumeration of
     distinct regions, *heaviest first*: ``x_i`` is a particle whose neighbourhood holds the
     most probability not yet covered by an earlier region (ties broken by the seeded

@@ -2,9 +2,9 @@
 
 The kitchen's streams need a PyBullet world, so this module binds them per problem: the
 folder's problem files (``problem-inspect.pddl``, ...) are the initial problems of the paper's
-tasks generated with seed 0 by :func:`sim.problem.task_problem`, and :func:`for_problem`
-rebuilds that task's world and returns :func:`streams.kitchen_module.make_module` for it.
-Regenerate the files with ``python -m streams.kitchen_example DIR``.
+tasks generated with seed 0 by :func:`ssr_compile.sim.problem.task_problem`, and :func:`for_problem`
+rebuilds that task's world and returns :func:`ssr_compile.streams.kitchen_module.make_module` for it.
+Regenerate the files with ``python -m ssr_compile.streams.kitchen_example DIR``.
 """
 
 from __future__ import annotations
@@ -29,9 +29,10 @@ def task_name(problem_path: str | Path) -> str:
 
 def for_problem(problem_path: str | Path, seed: int = 0):
     """The streams module for one of the folder's problem files (``seed``: the streams' RNG)."""
-    from sim.problem import task_problem
-    from sim.tasks import make_task
-    from streams.kitchen_module import make_module
+    from ssr_compile.sim.problem import task_problem
+    from ssr_compile.sim.tasks import make_task
+
+    from .kitchen_module import make_module
 
     task = make_task(task_name(problem_path), TASK_SEED)
     atexit.register(task.close)
@@ -40,8 +41,9 @@ def for_problem(problem_path: str | Path, seed: int = 0):
 
 
 def problem_text(name: str) -> str:
-    from sim.problem import task_problem
-    from sim.tasks import make_task
+    from ssr_compile.sim.problem import task_problem
+    from ssr_compile.sim.tasks import make_task
+
     from ssr_compile.printer import to_text
 
     task = make_task(name, TASK_SEED)

@@ -1,10 +1,10 @@
 """The streams module of ``domains/pddl/kitchen`` (paper §IV, §IV-A, §V, §VII).
 
 :func:`make_module` binds the kitchen's stream declarations to a task's world: the geometric
-streams of :class:`streams.kitchen.KitchenStreams` and the belief streams of
-``streams.belief_obs``.  Conventions (see ``sim/problem.py``): beliefs are in the canonical
+streams of :class:`ssr_compile.sim.samplers.KitchenStreams` and the belief streams of
+``ssr_compile.belief.observation``.  Conventions (see ``sim/problem.py``): beliefs are in the canonical
 frame (world frame, every drawer fully open); drawer angles are ``(drawer, q)``; a localized
-belief stands for its point estimate, as an :class:`~streams.kitchen.ObjPose` relative to its
+belief stands for its point estimate, as an :class:`~ssr_compile.sim.samplers.ObjPose` relative to its
 surface.
 
 Streams are evaluated in a *planning state* of the world, never in its latent state: objects
@@ -22,23 +22,23 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import numpy as np
+from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
+from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
+from ssr_compile.sim.problem import canonical_surface
+from ssr_compile.sim.robot import ARM_TUCK
+from ssr_compile.sim.samplers import Grasp, KitchenStreams, ObjPose
+from ssr_compile.sim.tasks import Task
+from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
 
-from sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
-from sim.geometry import invert, multiply, pose, quat_from_yaw
-from sim.problem import canonical_surface
-from sim.robot import ARM_TUCK
-from sim.tasks import Task
-from sim.world import DRAWER_TRAVEL, DRAWERS, World
-from ssr_compile.stream import StreamInfo, StreamsModule
-from streams.belief import ObservationModel, PoseBelief
-from streams.belief_obs import (
+from ssr_compile.belief.observation import (
     Observation,
     ObsRegion,
     obs_cost,
     update_belief,
     visibility_lower_bound,
 )
-from streams.kitchen import Grasp, KitchenStreams, ObjPose
+from ssr_compile.belief.particles import ObservationModel, PoseBelief
+from ssr_compile.stream import StreamInfo, StreamsModule
 
 MODEL = ObservationModel(p_fn=0.1)
 EPS = 0.1  # occlusion tolerance of an observation (paper §V-B)
@@ -267,15 +267,15 @@ STREAM_INFO = {
 
 
 def make_module(task: Task, rng: np.random.Generator, values: dict | None = None) -> StreamsModule:
-    """The streams module for ``task`` (``values``: those of :func:`sim.problem.task_problem`;
+    """The streams module for ``task`` (``values``: those of :func:`ssr_compile.sim.problem.task_problem`;
     built here when not given)."""
     if values is None:
-        from sim.problem import task_problem
+        from ssr_compile.sim.problem import task_problem
 
         values = task_problem(task)[1]
     km = KitchenModule(task, rng)
     module = StreamsModule(
-        "streams.kitchen_module", streams=km.streams(), info=dict(STREAM_INFO), values=values
+        "ssr_compile.streams.kitchen_module", streams=km.streams(), info=dict(STREAM_INFO), values=values
     )
     module.module = km
     return module

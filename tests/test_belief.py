@@ -11,16 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from streams.belief import (
-    ObservationModel,
-    PoseBelief,
-    Surface,
-    logsumexp,
-    systematic_resample,
-    update,
-    wrap_angle,
-)
-from streams.belief_obs import (
+from ssr_compile.belief.observation import (
     Observation,
     ObsRegion,
     blocking_bodies,
@@ -33,8 +24,17 @@ from streams.belief_obs import (
     visibility_lower_bound,
     visibility_mask,
 )
-from streams.belief_plot import plot_belief
-from streams.visibility import PyBulletCamera
+from ssr_compile.belief.particles import (
+    ObservationModel,
+    PoseBelief,
+    Surface,
+    logsumexp,
+    systematic_resample,
+    update,
+    wrap_angle,
+)
+from ssr_compile.belief.plot import plot_belief
+from ssr_compile.belief.visibility import PyBulletCamera
 
 A_SURF = Surface("a", (0.0, 0.0), (1.0, 1.0), 0.0)
 B_SURF = Surface("b", (10.0, 10.0), (1.0, 1.0), 1.0)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from ssr_compile.streams import belief_detect as bd
 
 from ssr_compile import syntax as S
 from ssr_compile.compile.instantiate import Instance, Result, instantiate
@@ -22,7 +23,6 @@ from ssr_compile.parse import parse_file, parse_text
 from ssr_compile.preimage import PlanInvalid, plan_preimage
 from ssr_compile.printer import to_text
 from ssr_compile.stream import Generator, ValueTable, call_function, call_test, from_module
-from streams import belief_detect as bd
 
 FOLDER = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "belief-detect"
 FILES = ["domain.pddl", "stream.pddl", "problem-occluded.pddl", "problem-clear.pddl"]

@@ -14,6 +14,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from conftest import require_corpus
 
 from ssr_compile import syntax as S
 from ssr_compile.compile.costs import choose_scale, self_loop_cost, to_int
@@ -30,7 +31,6 @@ from ssr_compile.printer import to_text
 FIX = Path(__file__).parent / "fixtures" / "compile"
 PP = FIX / "pp1d"
 BLOCKS = FIX / "blocks"
-CORPUS_BW = Path("/work/shared/corpus/pddlstream-examples/examples/blocksworld")
 EMPTY_STREAMS = "(define (stream x))"
 NO_AXIOMS = FullCapabilities(axioms=False)
 
@@ -198,8 +198,8 @@ def test_classical_blocksworld_passes_through_unchanged():
     _passthrough(d, p)
 
 
-@pytest.mark.skipif(not CORPUS_BW.is_dir(), reason="corpus blocksworld not present")
 def test_corpus_blocksworld_passes_through():
+    CORPUS_BW = require_corpus("pddlstream-examples/examples/blocksworld")
     d = parse_domain((CORPUS_BW / "domain.pddl").read_text())
     p = parse_problem((CORPUS_BW / "problem.pddl").read_text())
     _passthrough(d, p)

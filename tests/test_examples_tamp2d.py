@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from ssr_compile.streams import tamp2d as T
 
 from ssr_compile import syntax as S
 from ssr_compile.check import check_domain, check_problem, check_streams
@@ -20,7 +21,6 @@ from ssr_compile.parse import parse_domain, parse_file, parse_problem, parse_str
 from ssr_compile.preimage import PlanInvalid, plan_preimage, stream_plan
 from ssr_compile.printer import to_text
 from ssr_compile.stream import Generator, from_module
-from streams import tamp2d as T
 
 ROOT = Path(__file__).resolve().parents[1] / "domains" / "pddl"
 TAMP2D = ROOT / "tamp2d"
@@ -48,7 +48,7 @@ def load(folder: Path, name: str = "problem.pddl"):
 def test_example_toml_names_the_streams_module_and_existing_problems(folder):
     tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
     config = tomllib.loads((folder / "example.toml").read_text())
-    assert config["streams"] == "streams.tamp2d"
+    assert config["streams"] == "ssr_compile.streams.tamp2d"
     for name in config.get("problems", []):
         assert (folder / name).is_file()
     module = from_module(T)

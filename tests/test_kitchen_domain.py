@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from ssr_compile.sim.actions import MoveBase, execute
+from ssr_compile.sim.problem import task_problem
+from ssr_compile.sim.tasks import make_task
 
-from sim.actions import MoveBase, execute
-from sim.problem import task_problem
-from sim.tasks import make_task
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.parse import parse_file, parse_text
 from ssr_compile.planners import get_planner
@@ -109,8 +109,9 @@ def test_cook_detects_picks_places_and_presses(files):
 
 
 def test_focused_solves_inspect_and_the_first_action_runs(files):
+    from ssr_compile.streams.kitchen_module import make_module, to_action
+
     from ssr_compile.focused import solve
-    from streams.kitchen_module import make_module, to_action
 
     domain, streams = files
     task = make_task("inspect", 0)

@@ -4,9 +4,9 @@ import json
 from pathlib import Path
 
 import pytest
+from ssr_compile.streams import kitchen_example
 
 from ssr_compile.cli import main
-from streams import kitchen_example
 
 FOLDER = Path(__file__).resolve().parent.parent / "domains" / "pddl" / "kitchen"
 

@@ -11,6 +11,7 @@ import re
 from pathlib import Path
 
 import pytest
+from conftest import require_corpus
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -19,8 +20,6 @@ from ssr_compile.parse import parse_file, parse_text
 from ssr_compile.printer import to_text, typed_list
 
 FIXTURES = Path(__file__).parent / "fixtures" / "lang"
-CORPUS = Path("/work/shared/corpus/pddlstream-examples")
-CORPUS_FILES = sorted(CORPUS.rglob("*.pddl")) if CORPUS.exists() else []
 
 SHORT_WORDS = re.compile(r"(:param|:pre|:eff|:inp|:dom|:out|:cert|\(incr) ")
 
@@ -46,10 +45,10 @@ def test_fixture_round_trip(path):
     assert_round_trip(parse_file(path), str(path))
 
 
-@pytest.mark.skipif(not CORPUS.exists(), reason="the pddlstream example corpus is not here")
 def test_corpus_round_trip():
-    assert len(CORPUS_FILES) > 50
-    for path in CORPUS_FILES:
+    corpus_files = sorted(require_corpus("pddlstream-examples").rglob("*.pddl"))
+    assert len(corpus_files) > 50
+    for path in corpus_files:
         assert_round_trip(parse_file(path), str(path))
 
 

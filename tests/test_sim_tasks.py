@@ -3,11 +3,11 @@ plan (no planner): the world, the streams and the actions work together (paper a
 
 import numpy as np
 import pytest
+from ssr_compile.sim.scripted import Scripted
+from ssr_compile.sim.tasks import TASKS, make_task
+from ssr_compile.sim.world import DRAWER_TRAVEL
 
-from sim.scripted import Scripted
-from sim.tasks import TASKS, make_task
-from sim.world import DRAWER_TRAVEL
-from streams.belief import ObservationModel
+from ssr_compile.belief.particles import ObservationModel
 
 EXACT = ObservationModel(p_fn=0.0)
 
@@ -128,7 +128,7 @@ def test_same_seed_same_scene():
 
 
 def test_cook_block_is_hidden_initially():
-    from sim.perception import is_visible
+    from ssr_compile.sim.perception import is_visible
 
     for seed in range(4):
         t = make_task("cook", seed)
@@ -140,7 +140,7 @@ def test_cook_block_is_hidden_initially():
 
 @pytest.mark.parametrize("view", ["camera", "top"])
 def test_render_task_writes_png(tmp_path, view):
-    from sim.render import render_task
+    from ssr_compile.sim.render import render_task
 
     out = render_task("swap", 0, str(tmp_path / "s.png"), view=view)
     with open(out, "rb") as f:

@@ -2,14 +2,14 @@
 
 import numpy as np
 import pytest
+from ssr_compile.sim.geometry import angle_between, invert, multiply
+from ssr_compile.sim.motion import refine
+from ssr_compile.sim.perception import is_visible, observe, visible_fraction
+from ssr_compile.sim.robot import ARM_TUCK
+from ssr_compile.sim.samplers import KitchenStreams, stream_table
+from ssr_compile.sim.world import DRAWER_TRAVEL, PARK_BASE, World
 
-from sim.geometry import angle_between, invert, multiply
-from sim.motion import refine
-from sim.perception import is_visible, observe, visible_fraction
-from sim.robot import ARM_TUCK
-from sim.world import DRAWER_TRAVEL, PARK_BASE, World
-from streams.belief import ObservationModel
-from streams.kitchen import KitchenStreams, stream_table
+from ssr_compile.belief.particles import ObservationModel
 
 
 @pytest.fixture(scope="module")
@@ -103,7 +103,7 @@ def test_sugar_box_blocks_top_drawer(scene):
     ks = KitchenStreams(scene, np.random.default_rng(2))
     scene.set_drawer("top_drawer", DRAWER_TRAVEL)
     scene.set_object("sugar_box", "top_drawer", 0.15, 0.0, 0.0)
-    from sim.actions import execute
+    from ssr_compile.sim.actions import execute
 
     for (base,) in ks.sample_drawer_base("top_drawer"):
         motion = ks.plan_drawer("top_drawer", DRAWER_TRAVEL, 0.0, base)
@@ -184,7 +184,7 @@ def test_grasps_fit_gripper(world):
         assert {g.kind for g in gs} == {"top", "side"}
         for g in gs:  # the finger axis (tool y) spans at most the gripper opening
             tool_in_obj = invert(g.pose)
-            from sim.geometry import quat_to_matrix
+            from ssr_compile.sim.geometry import quat_to_matrix
 
             y_axis = quat_to_matrix(tool_in_obj[1])[:, 1]
             span = 2 * np.abs(y_axis) @ np.asarray(world.half_extents[obj])

@@ -8,8 +8,8 @@ import numpy as np
 import pybullet as p
 import pytest
 
-import streams.visibility as visibility_mod
-from streams.visibility import PyBulletCamera, as_pos_quat, bodies_at
+import ssr_compile.belief.visibility as visibility_mod
+from ssr_compile.belief.visibility import PyBulletCamera, as_pos_quat, bodies_at
 
 
 @pytest.fixture(scope="module")

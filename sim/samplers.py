@@ -1,7 +1,7 @@
 """Geometric streams of the kitchen domain (paper §IV, DESIGN §6), as plain callables.
 
 Generator streams return iterables of output tuples, function streams return one tuple or
-None, tests return bool.  All of them act on a :class:`sim.world.World` (checking hypothetical
+None, tests return bool.  All of them act on a :class:`ssr_compile.sim.world.World` (checking hypothetical
 states inside ``world.saved()``, so the world is unchanged afterwards) and draw randomness from
 one ``numpy.random.Generator``.  :func:`stream_table` names them for a streams module.
 
@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.actions import DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
-from sim.geometry import (
+from .actions import DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
+from .geometry import (
     Pose,
     invert,
     matrix_to_quat,
@@ -28,9 +28,9 @@ from sim.geometry import (
     quat_from_yaw,
     quat_mul,
 )
-from sim.motion import refine, rrt_connect
-from sim.robot import ARM_TUCK, BASE_LIMITS, MOUNT_OFFSET
-from sim.world import DRAWER_TRAVEL, World
+from .motion import refine, rrt_connect
+from .robot import ARM_TUCK, BASE_LIMITS, MOUNT_OFFSET
+from .world import DRAWER_TRAVEL, World
 
 Conf = tuple[float, ...]
 MAX_FINGER_SPAN = 0.07  # widest object the gripper closes on (opening 0.08)

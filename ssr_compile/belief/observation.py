@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ssr_compile.compile.costs import self_loop_cost
-from streams.belief import ObservationModel, PoseBelief, derived_rng, update, wrap_angle
-from streams.visibility import Visibility, bodies_at
+from .determinize import self_loop_cost
+from .particles import ObservationModel, PoseBelief, derived_rng, update, wrap_angle
+from .visibility import Visibility, bodies_at
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -167,7 +167,7 @@ def visibility_mask(
     ignore: Collection[int] = (),
     min_visible_fraction: float = 0.5,
 ) -> np.ndarray:
-    """Which particles of ``pb`` would be visible (bool (N,)), for :func:`streams.belief.update`.
+    """Which particles of ``pb`` would be visible (bool (N,)), for :func:`ssr_compile.belief.particles.update`.
 
     Rule: a pose is visible when at least ``min_visible_fraction`` of its 9 box test points
     (:func:`box_points`) are visible -- a detector needs a good part of the object in view.

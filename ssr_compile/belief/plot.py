@@ -15,7 +15,7 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LinearSegmentedColormap  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 
-from streams.belief import PoseBelief, Surface  # noqa: E402
+from .particles import PoseBelief, Surface  # noqa: E402
 
 #: black (low weight) -> green (high weight)
 WEIGHT_CMAP = LinearSegmentedColormap.from_list("black_green", ["#000000", "#00c800"])

@@ -10,7 +10,7 @@ The detection model (§V-B): no false positives, a false negative with probabili
 the object is visible, and a Gaussian pose measurement ``z ~ N(x, Sigma)`` when detected.
 :func:`update` is the deterministic Bayesian filter step given what was (or was not) observed;
 the planner-facing streams (sample-obs, test-vis/BVis, ObsCost, update-belief) are in
-:mod:`streams.belief_obs`.
+:mod:`ssr_compile.belief.observation`.
 """
 
 from __future__ import annotations
@@ -473,7 +473,7 @@ def update(
 
     ``detection`` is a detected pose ``(x, y, z, yaw)``, an ``Observation`` (its ``z`` is used)
     or ``None`` for a miss; ``visible_mask`` (N,) says which particles the camera could see
-    (see :func:`streams.belief_obs.visibility_mask`).
+    (see :func:`ssr_compile.belief.observation.visibility_mask`).
 
     * Detection ``z``: ``w_i <- w_i (1 - p_fn) N(z; x_i, Sigma)`` for visible particles and
       ``w_i <- 0`` for occluded ones (no false positives: an occluded object is never detected).

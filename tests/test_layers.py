@@ -1,0 +1,102 @@
+"""The layers point one way: ssr_compile (toolkit) <- sim/ (the world) <- streams/ (bindings).
+
+Reads every import statement (in-function imports included) of the checkout's ``sim/`` and
+``ssr_compile/`` and resolves relative imports, so a forbidden arrow cannot hide.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _package_of(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[0] in ("sim", "streams"):
+        parts = ["ssr_compile", *parts]
+    return ".".join(parts[:-1])
+
+
+def imported_modules(path: Path) -> list[tuple[int, str]]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    package = _package_of(path)
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out.extend((node.lineno, a.name) for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                name = ".".join(base + ([node.module] if node.module else []))
+            else:
+                name = node.module or ""
+            if node.module is None:  # from . import x: each x is a module of that package
+                out.extend((node.lineno, f"{name}.{a.name}") for a in node.names)
+            else:
+                out.append((node.lineno, name))
+    return out
+
+
+def _violations(folder: str, forbidden: tuple[str, ...]) -> list[str]:
+    bad = []
+    for path in sorted((ROOT / folder).rglob("*.py")):
+        for line, name in imported_modules(path):
+            top = name.split(".")
+            if any(name == f or name.startswith(f + ".") for f in forbidden) or top[0] in (
+                "sim",
+                "streams",
+            ):
+                bad.append(f"{path.relative_to(ROOT)}:{line}: imports {name}")
+    return bad
+
+
+def test_sim_never_imports_streams():
+    assert _violations("sim", ("ssr_compile.streams",)) == []
+
+
+def test_toolkit_imports_neither_sim_nor_streams_at_module_level_of_core():
+    # The toolkit's core (language, compiler, planners, solver, belief, policy) never imports
+    # the world or the bindings; only the CLI's simulator commands may (inside functions).
+    core = [p for p in (ROOT / "ssr_compile").rglob("*.py") if not p.name.startswith("cli")]
+    bad = []
+    for path in core:
+        for line, name in imported_modules(path):
+            if name.startswith(("ssr_compile.sim", "ssr_compile.streams")) or name.split(".")[
+                0
+            ] in ("sim", "streams"):
+                bad.append(f"{path.relative_to(ROOT)}:{line}: imports {name}")
+    assert bad == []
+
+
+def test_nothing_imports_the_generic_top_level_names():
+    bad = []
+    for folder in ("sim", "streams", "ssr_compile", "tests", "bench"):
+        for path in (ROOT / folder).rglob("*.py"):
+            for line, name in imported_modules(path):
+                if name.split(".")[0] in ("sim", "streams"):
+                    bad.append(f"{path.relative_to(ROOT)}:{line}: imports {name}")
+    assert bad == []
+
+
+def test_the_checker_sees_a_planted_forbidden_import(tmp_path, monkeypatch):
+    planted = ROOT / "sim" / "_planted_for_test.py"
+    planted.write_text("def f():\n    from ..streams import tamp2d\n    return tamp2d\n")
+    try:
+        assert _violations("sim", ("ssr_compile.streams",)) == [
+            "sim/_planted_for_test.py:2: imports ssr_compile.streams"
+        ]
+    finally:
+        planted.unlink()
+
+
+@pytest.mark.parametrize("name", ["ssr_compile.sim.world", "ssr_compile.streams.tamp2d"])
+def test_subpackages_import_under_the_toolkit_name(name):
+    import importlib
+
+    assert importlib.import_module(name).__name__ == name
