@@ -1,8 +1,10 @@
-"""Focused solver: median solve time over 5 runs, planner calls and stream calls, with and
-without deferred evaluation (paper §VII), for every example folder in ``domains/pddl/`` and the
-compiler test fixture ``tests/fixtures/compile/pp1d`` (DESIGN §2: figures, no assertions).
+"""Focused solver: median solve time over N runs, planner calls, stream calls and plan cost,
+with and without deferred evaluation (paper §VII), for every example folder in
+``domains/pddl/`` and the compiler test fixture ``tests/fixtures/compile/pp1d`` (DESIGN §2:
+figures, no assertions).  ``size`` is the largest compiled problem of a run (objects/facts of
+the optimistic problem), when the solver reports it.
 
-Run: python bench/solve_bench.py [--runs N] [--time-limit S]
+Run: python bench/solve_bench.py [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer]
 """
 
 from __future__ import annotations
@@ -64,21 +66,47 @@ def run_once(folder: Path, config: dict, problem: str, defer: bool, time_limit: 
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())
-    return sol.status, elapsed, sol.stats.planner_calls, calls
+    sizes = getattr(sol.stats, "sizes", None) or []
+    size = max(sizes, key=lambda z: (z[1], z[0]), default=None)
+    cost = sol.cost if sol.cost is not None else float("nan")
+    return sol.status, elapsed, sol.stats.planner_calls, calls, cost, size
+
+
+def selected(name: str, problem: str, only: list[str]) -> bool:
+    if not only:
+        return True
+    for o in only:
+        ex, _, pr = o.partition(":")
+        if ex == name and (not pr or pr == problem or pr + ".pddl" == problem):
+            return True
+    return False
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--time-limit", type=float, default=60.0)
+    ap.add_argument(
+        "--only",
+        action="append",
+        default=[],
+        metavar="NAME[:PROBLEM]",
+        help="only this example (and problem); repeatable, e.g. --only tamp2d:problem-blocked",
+    )
+    ap.add_argument("--no-defer", action="store_true", help="only the runs without deferral")
     args = ap.parse_args()
-    head = f"{'example':22s} {'problem':24s} {'defer':5s} {'status':10s} {'median s':>9s} {'planner':>8s} {'streams':>8s}"
+    head = (
+        f"{'example':16s} {'problem':22s} {'defer':5s} {'status':8s} {'median s':>9s} "
+        f"{'planner':>7s} {'streams':>7s} {'cost':>8s} {'size obj/facts':>14s}"
+    )
     print(head)
     print("-" * len(head))
     for name, (folder, config) in examples():
         problems = config.get("problems") or sorted(x.name for x in folder.glob("problem*.pddl"))
         for problem in problems:
-            for defer in (False, True):
+            if not selected(name, problem, args.only):
+                continue
+            for defer in (False,) if args.no_defer else (False, True):
                 rows = []
                 try:
                     rows = [
@@ -86,14 +114,22 @@ def main() -> None:
                         for _ in range(args.runs)
                     ]
                 except Exception as e:  # noqa: BLE001 - a broken example is a row, not a crash
-                    print(f"{name:22s} {problem:24s} {str(defer):5s} error: {e}")
+                    print(f"{name:16s} {problem:22s} {str(defer):5s} error: {e}")
                     continue
                 statuses = {r[0] for r in rows}
+                sizes = [r[5] for r in rows if r[5] is not None]
+                size = (
+                    f"{statistics.median(z[0] for z in sizes):.0f}/"
+                    f"{statistics.median(z[1] for z in sizes):.0f}"
+                    if sizes
+                    else "-"
+                )
                 print(
-                    f"{name:22s} {problem:24s} {str(defer):5s} {'/'.join(sorted(statuses)):10s} "
+                    f"{name:16s} {problem:22s} {str(defer):5s} {'/'.join(sorted(statuses)):8s} "
                     f"{statistics.median(r[1] for r in rows):9.3f} "
-                    f"{statistics.median(r[2] for r in rows):8.0f} "
-                    f"{statistics.median(r[3] for r in rows):8.0f}",
+                    f"{statistics.median(r[2] for r in rows):7.0f} "
+                    f"{statistics.median(r[3] for r in rows):7.0f} "
+                    f"{statistics.median(r[4] for r in rows):8.2f} {size:>14s}",
                     flush=True,
                 )
 
