@@ -41,7 +41,10 @@ class StreamInfo:
     first).  ``cost``: expected cost of a call, in seconds or any consistent unit.
     ``optimistic_value``: for a cost function, the value planned with before evaluation (a
     lower bound; default 1).  ``kind``: "generator" (default for streams with outputs),
-    "function" (at most one output tuple), or "test".
+    "function" (at most one output tuple), or "test".  ``constant_outputs``: the outputs are
+    *constants* in the sense of paper §VI-A (grasps: still valid after new observations; not
+    poses, configurations or trajectories); the online policy keeps them and their facts
+    from one replanning cycle to the next (Algorithm 1's ``ConstantFacts``).
     """
 
     deferrable: bool = False
@@ -49,6 +52,7 @@ class StreamInfo:
     cost: float = 1.0
     optimistic_value: float | None = None
     kind: str | None = None
+    constant_outputs: bool = False
 
     @classmethod
     def of(cls, value: StreamInfo | Mapping[str, Any] | None, name: str) -> StreamInfo:

@@ -1,0 +1,458 @@
+"""The online replanning policy (paper §VI, Algorithm 1) and the contract of what it acts in.
+
+Each cycle:
+
+1. DETERMINIZE: the :class:`Agent` turns its current belief (and what the robot knows for
+   certain: its configuration, what it holds) into a PDDLStream problem and the Python values
+   of its objects;
+2. when the last plan left a tail and the variant uses constraints, PLAN with the tail's
+   structure enforced (Algorithm 2, :mod:`ssr_compile.compile.constraints`) from
+   ``s ∪ f_prev`` under its own time limit; on failure or time-out,
+3. PLAN again without constraints;
+4. no plan: failure; an empty plan: the goal belief is reached;
+5. otherwise EXECUTE the first action in the :class:`Environment`, receive its observation,
+   UPDATE the belief, keep ``ConstantFacts(f)`` (the certificate's static facts over
+   constants only) and the unexecuted tail, and repeat.
+
+PLAN is the Focused solver (:func:`ssr_compile.focused.solve`); with deferral (§VII) it leaves
+the deferrable streams the first action does not need optimistic, and they stay so until a
+later cycle needs them.
+
+The policy never reads the true state: success is judged afterwards by
+:meth:`Environment.goal_holds` on the environment's true state.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol, runtime_checkable
+
+from . import syntax as S
+from .focused import Solution, Step, solve
+from .stream import StreamsModule
+
+VARIANTS: dict[str, tuple[bool, bool]] = {
+    # name: (plan constraints, deferred streams) -- Table I's four columns
+    "neither": (False, False),
+    "constraints": (True, False),
+    "deferred": (False, True),
+    "both": (True, True),
+}
+
+
+# ---------------------------------------------------------------- the contract
+
+
+@runtime_checkable
+class Environment(Protocol):
+    """The world the policy acts in.
+
+    ``observe()`` is the observation before the first plan (``None`` if there is none);
+    ``execute(step)`` carries out one action of a plan (its arguments' Python values are in
+    ``step.values``) and returns what the robot observes afterwards -- a failed execution is an
+    observation too, never an exception; ``goal_holds()`` reads the *true* state, for
+    evaluation only (the policy never calls it).  ``close()`` frees resources.
+    """
+
+    def observe(self) -> Any: ...
+
+    def execute(self, step: Step) -> Any: ...
+
+    def goal_holds(self) -> bool: ...
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class Agent(Protocol):
+    """The robot's side: its belief and what it knows for certain.
+
+    ``domain`` and ``streams`` are the PDDLStream domain and stream file it plans with.
+    ``problem()`` (DETERMINIZE) returns the problem for the current belief and a
+    :class:`StreamsModule` whose ``values`` hold the Python values of its objects;
+    ``update(step, observation)`` (UPDATEBELIEF) folds an observation in (``step`` is ``None``
+    for the observation before the first plan); ``is_constant(name)`` says which of the
+    problem's objects are constants in the sense of §VI-A (object names, grasps: still valid
+    after new observations; not poses, configurations, trajectories or beliefs);
+    ``summary()`` is a one-line description of the belief for logs.
+    """
+
+    domain: S.Domain
+    streams: S.StreamFile
+
+    def problem(self) -> tuple[S.Problem, StreamsModule]: ...
+
+    def update(self, step: Step | None, observation: Any) -> None: ...
+
+    def is_constant(self, name: str) -> bool: ...
+
+    def summary(self) -> str: ...
+
+
+@dataclass
+class Episode:
+    """An environment and the agent that acts in it (what an example's factory returns)."""
+
+    environment: Environment
+    agent: Agent
+    name: str = ""
+
+    def close(self) -> None:
+        self.environment.close()
+
+
+# ---------------------------------------------------------------- settings and records
+
+
+@dataclass(frozen=True)
+class PolicySettings:
+    """Limits and options of one episode (defaults: the paper's 10 minutes of planning)."""
+
+    variant: str = "both"
+    budget: float = 600.0  # total planning time of the episode, seconds
+    constrained_time: float = 30.0  # limit of each constrained attempt
+    unconstrained_time: float = 300.0  # limit of each unconstrained attempt
+    max_cycles: int = 100
+    planner: str = "fd"
+    initial_level: int = 1
+    max_level: int = 8
+    max_cost: float = math.inf  # c*: plans must be cheaper
+
+    def __post_init__(self) -> None:
+        if self.variant not in VARIANTS:
+            raise ValueError(
+                f"unknown variant '{self.variant}'; expected one of {', '.join(VARIANTS)}"
+            )
+        for name in ("budget", "constrained_time", "unconstrained_time"):
+            v = getattr(self, name)
+            if not (v > 0 and math.isfinite(v)):
+                raise ValueError(f"{name} must be a positive number of seconds, got {v}")
+        if self.max_cycles < 1:
+            raise ValueError(f"max_cycles must be at least 1, got {self.max_cycles}")
+
+    @property
+    def constraints(self) -> bool:
+        return VARIANTS[self.variant][0]
+
+    @property
+    def defer(self) -> bool:
+        return VARIANTS[self.variant][1]
+
+
+@dataclass
+class ReplanState:
+    """What one replanning call inherits from the last (Algorithm 1's ``f_prev``, ``a_prev``).
+
+    ``tail``: the unexecuted actions of the last plan (object names); ``constants``: which of
+    its argument names are constants; ``kept_facts``: ``ConstantFacts(f)``, the certificate's
+    static facts over constants only; ``kept_values``: the Python values of the constants
+    those facts name that are not objects of the next problem (stream outputs such as grasps).
+    """
+
+    tail: list[tuple[str, tuple[str, ...]]] | None = None
+    constants: frozenset[str] = frozenset()
+    kept_facts: tuple[S.Atom, ...] = ()
+    kept_values: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Cycle:
+    """One cycle of the policy, as logged."""
+
+    index: int
+    action: str | None  # the executed action, None when the plan was empty or none was found
+    constrained: str  # "held", "fell back", "timeout" (constrained attempt ran out) or "-"
+    planning_time: float
+    stream_calls: int
+    planner_calls: int
+    deferred: int  # optimistic results left for a later cycle
+    plan_length: int | None
+    cost: float | None
+    belief: str
+    execution_time: float = 0.0
+    update_time: float = 0.0
+    overhead_time: float = 0.0  # the policy's own time (determinize, constants, bookkeeping)
+    constrained_time: float = 0.0  # planning time of the constrained attempt alone
+    unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
+
+    def as_dict(self) -> dict:
+        d = dict(vars(self))
+        for k, v in d.items():
+            if isinstance(v, float):
+                d[k] = round(v, 4) if math.isfinite(v) else None
+        return d
+
+    def line(self) -> str:
+        what = self.action if self.action is not None else "(no action)"
+        cost = "-" if self.cost is None else f"{self.cost:g}"
+        return (
+            f"cycle {self.index:3d}  {what:48s}  constrained {self.constrained:9s}  "
+            f"plan {self.plan_length if self.plan_length is not None else '-'} (cost {cost})  "
+            f"planning {self.planning_time:7.3f} s  streams {self.stream_calls:3d}  "
+            f"deferred {self.deferred:2d}  | {self.belief}"
+        )
+
+
+@dataclass
+class EpisodeResult:
+    """The outcome: judged on the environment's true state."""
+
+    success: bool  # the goal holds in the true state at the end
+    believed: bool  # the policy reached the goal belief (an empty plan)
+    reason: str  # why the episode ended
+    cycles: list[Cycle]
+    planning_time: float
+    wall_time: float
+
+    @property
+    def constrained_held(self) -> int:
+        return sum(c.constrained == "held" for c in self.cycles)
+
+    @property
+    def fallbacks(self) -> int:
+        return sum(c.constrained in ("fell back", "timeout") for c in self.cycles)
+
+    @property
+    def actions(self) -> list[str]:
+        return [c.action for c in self.cycles if c.action is not None]
+
+    def as_dict(self) -> dict:
+        return {
+            "success": self.success,
+            "believed": self.believed,
+            "reason": self.reason,
+            "cycles": len(self.cycles),
+            "actions": len(self.actions),
+            "planning_time": round(self.planning_time, 4),
+            "wall_time": round(self.wall_time, 4),
+            "constrained_held": self.constrained_held,
+            "fallbacks": self.fallbacks,
+            "stream_calls": sum(c.stream_calls for c in self.cycles),
+            "planner_calls": sum(c.planner_calls for c in self.cycles),
+        }
+
+
+# ---------------------------------------------------------------- Algorithm 1
+
+
+def constant_facts(
+    solution: Solution, problem: S.Problem, is_constant: Callable[[str], bool]
+) -> tuple[tuple[S.Atom, ...], dict[str, Any]]:
+    """``ConstantFacts(f)``: the certificate's static facts whose arguments are all constants,
+    and the values of the constants among them that the problem does not declare."""
+    declared = {o.name for o in problem.objects}
+    facts: list[S.Atom] = []
+    values: dict[str, Any] = {}
+    for atom in solution.certificate:
+        if not isinstance(atom, S.Atom) or atom.pred == "=":
+            continue
+        names = [a.name for a in atom.args]
+        if not all(is_constant(n) for n in names):
+            continue
+        facts.append(atom)
+        for n in names:
+            if n not in declared and solution.values is not None and n in solution.values:
+                values[n] = solution.values.value(n)
+    return tuple(dict.fromkeys(facts)), values
+
+
+def _stream_constants(solution: Solution, module: StreamsModule) -> set[str]:
+    """Real outputs of streams whose info declares their outputs constants (e.g. grasps)."""
+    out: set[str] = set()
+    for r in solution.evaluated:
+        if not r.optimistic and module.info_for(r.instance.stream).constant_outputs:
+            out.update(r.outputs)
+    return out
+
+
+def _with_kept(
+    problem: S.Problem, module: StreamsModule, state: ReplanState
+) -> tuple[S.Problem, StreamsModule]:
+    """``s ∪ f_prev``: the problem with the kept constant facts and their objects added."""
+    if not state.kept_facts:
+        return problem, module
+    declared = {o.name for o in problem.objects}
+    clash = [n for n in state.kept_values if n in declared]
+    values = {k: v for k, v in state.kept_values.items() if k not in clash}
+    extra = tuple(S.Typed(n) for n in values if n not in declared)
+    present = set(problem.init)
+    facts = tuple(
+        f
+        for f in state.kept_facts
+        if f not in present and not any(a.name in clash for a in f.args)
+    )
+    new_problem = replace(problem, objects=problem.objects + extra, init=problem.init + facts)
+    new_module = replace(module, values={**module.values, **values})
+    return new_problem, new_module
+
+
+def run_policy(
+    episode: Episode,
+    settings: PolicySettings | None = None,
+    *,
+    on_cycle: Callable[[Cycle], None] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> EpisodeResult:
+    """Run Algorithm 1 in ``episode`` until the goal belief, a failure or a limit."""
+    settings = settings or PolicySettings()
+    env, agent = episode.environment, episode.agent
+    start = time.monotonic()
+    planning = 0.0
+    cycles: list[Cycle] = []
+    state = ReplanState()
+
+    def finish(believed: bool, reason: str) -> EpisodeResult:
+        return EpisodeResult(
+            env.goal_holds(), believed, reason, cycles, planning, time.monotonic() - start
+        )
+
+    agent.update(None, env.observe())
+    for index in range(1, settings.max_cycles + 1):
+        cycle_start = time.monotonic()
+        remaining = settings.budget - planning
+        if remaining <= 0:
+            return finish(False, f"planning budget of {settings.budget:g} s exhausted")
+        problem, module = agent.problem()
+        constrained = "-"
+        solution: Solution | None = None
+        spent = {"c": 0.0, "u": 0.0}
+        streams_called = planners_called = 0
+
+        def attempt(prob, mod, limit, key, **kw) -> Solution:
+            nonlocal planning, streams_called, planners_called
+            sol = solve(
+                agent.domain,
+                agent.streams,
+                prob,
+                mod,
+                planner=settings.planner,
+                time_limit=limit,
+                max_cost=settings.max_cost,
+                defer=settings.defer,
+                initial_level=settings.initial_level,
+                max_level=settings.max_level,
+                progress=progress,
+                **kw,
+            )
+            planning += sol.stats.total_time
+            spent[key] += sol.stats.total_time
+            streams_called += sum(s.calls for s in sol.stats.streams.values())
+            planners_called += sol.stats.planner_calls
+            return sol
+
+        if settings.constraints and state.tail:
+            limit = min(settings.constrained_time, settings.budget - planning)
+            cprob, cmod = _with_kept(problem, module, state)
+            constants = state.constants | {o.name for o in cprob.objects if agent.is_constant(o.name)}
+            solution = attempt(
+                cprob,
+                cmod,
+                limit,
+                "c",
+                plan_tail=state.tail,
+                is_constant=lambda name, c=constants: name in c,
+            )
+            if solution.solved:
+                constrained = "held"
+            else:
+                constrained = "timeout" if solution.status == "timeout" else "fell back"
+                solution = None
+        if solution is None:
+            remaining = settings.budget - planning
+            if remaining <= 0:
+                cycles.append(
+                    _record(index, None, constrained, spent, streams_called, planners_called,
+                            None, agent, cycle_start)
+                )
+                if on_cycle:
+                    on_cycle(cycles[-1])
+                return finish(False, f"planning budget of {settings.budget:g} s exhausted")
+            solution = attempt(
+                problem, module, min(settings.unconstrained_time, remaining), "u"
+            )
+        if not solution.solved:
+            cycles.append(
+                _record(index, None, constrained, spent, streams_called, planners_called,
+                        solution, agent, cycle_start)
+            )
+            if on_cycle:
+                on_cycle(cycles[-1])
+            why = "planning budget exhausted" if planning >= settings.budget else solution.message
+            return finish(False, f"no plan: {why}")
+        plan = solution.plan or []
+        if not plan:
+            cycles.append(
+                _record(index, None, constrained, spent, streams_called, planners_called,
+                        solution, agent, cycle_start)
+            )
+            if on_cycle:
+                on_cycle(cycles[-1])
+            return finish(True, "goal belief reached")
+        # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
+        constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
+        constants |= _stream_constants(solution, module)
+        constants |= {n for n in state.kept_values}
+        kept_facts, kept_values = constant_facts(solution, problem, lambda n: n in constants)
+        tail = [(s.name, tuple(s.args)) for s in plan[1:]]
+        step = plan[0]
+        before_exec = time.monotonic()
+        observation = env.execute(step)
+        after_exec = time.monotonic()
+        agent.update(step, observation)
+        after_update = time.monotonic()
+        state = ReplanState(
+            tail or None,
+            frozenset(n for n in constants if n in kept_values or n in {o.name for o in problem.objects}),
+            kept_facts,
+            kept_values,
+        )
+        record = _record(index, str(step), constrained, spent, streams_called, planners_called,
+                         solution, agent, cycle_start)
+        record.execution_time = after_exec - before_exec
+        record.update_time = after_update - after_exec
+        total = time.monotonic() - cycle_start
+        record.overhead_time = max(
+            total - record.planning_time - record.execution_time - record.update_time, 0.0
+        )
+        cycles.append(record)
+        if on_cycle:
+            on_cycle(record)
+    return finish(False, f"no goal within {settings.max_cycles} cycles")
+
+
+def _record(index, action, constrained, spent, streams_called, planners_called, solution,
+            agent, cycle_start) -> Cycle:
+    deferred = len(solution.deferred) if solution is not None else 0
+    plan_len = len(solution.plan) if solution is not None and solution.plan is not None else None
+    cost = solution.cost if solution is not None and solution.solved else None
+    record = Cycle(
+        index,
+        action,
+        constrained,
+        spent["c"] + spent["u"],
+        streams_called,
+        planners_called,
+        deferred,
+        plan_len,
+        cost,
+        agent.summary(),
+        constrained_time=spent["c"],
+        unconstrained_time=spent["u"],
+    )
+    record.overhead_time = max(time.monotonic() - cycle_start - record.planning_time, 0.0)
+    return record
+
+
+def summarize(results: Iterable[EpisodeResult]) -> dict:
+    """Success rate and mean planning time of the successful episodes."""
+    results = list(results)
+    ok = [r for r in results if r.success]
+    return {
+        "episodes": len(results),
+        "successes": len(ok),
+        "success_rate": len(ok) / len(results) if results else 0.0,
+        "mean_planning_time": (sum(r.planning_time for r in ok) / len(ok)) if ok else None,
+    }
