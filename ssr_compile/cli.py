@@ -236,7 +236,12 @@ def _load_command_modules() -> None:
     """Import the modules that register further subcommands (each is optional)."""
     import importlib
 
-    for module in ("ssr_compile.cli_compile", "ssr_compile.cli_solve", "ssr_compile.cli_sim"):
+    for module in (
+        "ssr_compile.cli_compile",
+        "ssr_compile.cli_solve",
+        "ssr_compile.cli_sim",
+        "ssr_compile.cli_run",
+    ):
         try:
             importlib.import_module(module)
         except ModuleNotFoundError as e:

@@ -1,0 +1,109 @@
+"""Example folders: ``domain.pddl``, ``stream.pddl``, problems and ``example.toml``.
+
+``example.toml`` keys: ``streams`` (the streams module, an import path or a ``.py`` file),
+``problems`` (file names), optional solver settings (``level``, ``planner``, ``defer``,
+``time_limit``, ``max_level``) and, for the online policy, ``environment``: a factory
+``"module:function"`` called as ``function(problem, seed)`` that returns an
+:class:`ssr_compile.policy.Episode` (an environment and the agent acting in it).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from . import syntax as S
+from .errors import SSRError
+
+try:  # Python 3.11+
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+
+@dataclass(frozen=True)
+class Example:
+    folder: Path
+    config: dict = field(hash=False, compare=False)
+    domain: S.Domain = field(hash=False, compare=False)
+    streams: S.StreamFile = field(hash=False, compare=False)
+
+    @property
+    def name(self) -> str:
+        return self.folder.name
+
+    def environment_factory(self) -> Callable[..., Any]:
+        """The ``environment`` factory of ``example.toml``; bad input if absent or broken."""
+        spec = self.config.get("environment")
+        if not spec:
+            raise SSRError(
+                f"the example '{self.name}' names no environment in example.toml "
+                '(environment = "module:function"); `run` needs one',
+                file=str(self.folder / "example.toml"),
+            )
+        module_name, _, func = str(spec).partition(":")
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as e:
+            raise SSRError(
+                f"cannot import the environment module '{module_name}': {e}",
+                file=str(self.folder / "example.toml"),
+            ) from None
+        factory = getattr(module, func or "make_episode", None)
+        if not callable(factory):
+            raise SSRError(
+                f"'{module_name}' has no function '{func or 'make_episode'}'",
+                file=str(self.folder / "example.toml"),
+            )
+        return factory
+
+
+def resolve_folder(name: str | Path) -> Path | None:
+    """A folder path, or the name of a shipped example."""
+    path = Path(name)
+    if path.is_dir():
+        return path
+    from .resources import domains_dir
+
+    shipped = domains_dir() / str(name)
+    return shipped if shipped.is_dir() else None
+
+
+def read_config(folder: Path) -> dict:
+    config_file = folder / "example.toml"
+    if not config_file.exists():
+        raise SSRError(
+            f"no example.toml in {folder} (it names the streams module: "
+            'streams = "ssr_compile.streams.x")',
+            file=str(folder),
+        )
+    try:
+        return tomllib.loads(config_file.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as e:
+        raise SSRError(f"not valid TOML: {e}", file=str(config_file)) from None
+
+
+def load_example(name: str | Path) -> Example:
+    """Parse and check an example folder's domain and stream files (cached per folder)."""
+    folder = resolve_folder(name)
+    if folder is None:
+        raise SSRError(f"'{name}' is neither a folder nor a shipped example", file=str(name))
+    return _load(folder.resolve())
+
+
+@lru_cache(maxsize=32)
+def _load(folder: Path) -> Example:
+    import argparse
+
+    from .cli_compile import load_inputs
+
+    config = read_config(folder)
+    ns = argparse.Namespace(
+        domain=str(folder / "domain.pddl"), stream=str(folder / "stream.pddl"), problem=None
+    )
+    domain, streams, _ = load_inputs(ns, [])
+    return Example(folder, config, domain, streams)
