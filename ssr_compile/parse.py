@@ -9,8 +9,12 @@ expected.  The transformer is stateless, so a failed parse leaves the parser usa
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
 import re
+import stat
+import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -524,16 +528,85 @@ class _Build(Transformer):
 def parser() -> Lark:
     """The process-wide parser (built on first use, then reused)."""
     text = grammar_file(GRAMMAR).read_text(encoding="utf-8")
+    # Lark can keep the parse tables in a file (a new process then starts in ~15 ms instead of
+    # ~130 ms), but it *unpickles* that file: only a file in a private per-user folder may be
+    # used, never one in a shared folder such as /tmp (Lark's own cache=True), where another
+    # user could plant it.
+    cache = _cache_file(text)
     return Lark(
         text,
         parser="lalr",
         lexer="contextual",
         transformer=_Build(),
         maybe_placeholders=False,
-        # Lark keeps the parse tables in the temporary directory, keyed by the grammar's
-        # hash: a new process then starts in ~15 ms instead of ~130 ms.
-        cache=True,
+        cache=str(cache) if cache is not None else False,
     )
+
+
+def cache_dir() -> Path | None:
+    """The private per-user cache folder (``$XDG_CACHE_HOME/ssr-compile`` or
+    ``~/.cache/ssr-compile``), created 0700; None when it cannot be made safe.
+
+    Safe means: a real folder (not a symlink) owned by this user and writable by nobody else,
+    inside a folder that only this user or root can change.  Anything else: no cache.
+    """
+    if os.environ.get("SSR_COMPILE_NO_CACHE") or not hasattr(os, "getuid"):
+        return None
+    base = os.environ.get("XDG_CACHE_HOME", "")
+    try:
+        root = Path(base) if os.path.isabs(base) else Path.home() / ".cache"
+    except (RuntimeError, KeyError):  # no home folder
+        return None
+    folder = root / "ssr-compile"
+    try:
+        root.mkdir(mode=0o700, parents=True, exist_ok=True)
+        try:
+            folder.mkdir(mode=0o700)
+        except FileExistsError:
+            pass
+    except OSError:
+        return None
+    uid = os.getuid()
+    if not (_private(folder, uid) and _guarded(root, uid)):
+        return None
+    return folder
+
+
+def _private(path: Path, uid: int, *, directory: bool = True) -> bool:
+    """Is ``path`` (not followed if a symlink) ours, of the right kind, and writable only by us?"""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return False
+    kind = stat.S_ISDIR if directory else stat.S_ISREG
+    return kind(st.st_mode) and st.st_uid == uid and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+
+
+def _guarded(path: Path, uid: int) -> bool:
+    """Can only ``uid`` or root rename entries of folder ``path`` (or it is sticky)?"""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return False
+    if not stat.S_ISDIR(st.st_mode) or st.st_uid not in (uid, 0):
+        return False
+    return not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH) or bool(st.st_mode & stat.S_ISVTX)
+
+
+def _cache_file(grammar: str) -> Path | None:
+    """Where Lark may keep this grammar's tables, or None (build without a cache)."""
+    import lark
+
+    folder = cache_dir()
+    if folder is None:
+        return None
+    key = hashlib.sha256(
+        f"{grammar}\0{lark.__version__}\0{sys.version_info[:2]}".encode()
+    ).hexdigest()[:24]
+    path = folder / f"lark-{key}.pickle"
+    if os.path.lexists(path) and not _private(path, os.getuid(), directory=False):
+        return None  # someone else's file, a link, or writable by others: never read it
+    return path
 
 
 # ---------------------------------------------------------------- public API
