@@ -241,12 +241,15 @@ class EpisodeResult:
 def constant_facts(
     solution: Solution, problem: S.Problem, is_constant: Callable[[str], bool]
 ) -> tuple[tuple[S.Atom, ...], dict[str, Any]]:
-    """``ConstantFacts(f)``: the certificate's static facts whose arguments are all constants,
-    and the values of the constants among them that the problem does not declare."""
+    """``ConstantFacts(f)``: the static facts proven while solving (the plan's certificate and
+    the facts certified by the streams evaluated for it) whose arguments are all constants, and
+    the values of the constants among them that the problem does not declare."""
     declared = {o.name for o in problem.objects}
     facts: list[S.Atom] = []
     values: dict[str, Any] = {}
-    for atom in solution.certificate:
+    proven = list(solution.certificate)
+    proven += [f for r in solution.evaluated if not r.optimistic for f in r.certified]
+    for atom in proven:
         if not isinstance(atom, S.Atom) or atom.pred == "=":
             continue
         names = [a.name for a in atom.args]
@@ -338,7 +341,7 @@ def run_policy(
                 **kw,
             )
             planning += sol.stats.total_time
-            spent[key] += sol.stats.total_time
+            spent[key] += sol.stats.total_time  # noqa: B023 (called within the iteration)
             streams_called += sum(s.calls for s in sol.stats.streams.values())
             planners_called += sol.stats.planner_calls
             return sol
@@ -395,7 +398,9 @@ def run_policy(
         constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
         constants |= _stream_constants(solution, module)
         constants |= {n for n in state.kept_values}
-        kept_facts, kept_values = constant_facts(solution, problem, lambda n: n in constants)
+        kept_facts, kept_values = constant_facts(
+            solution, problem, lambda n: n in constants  # noqa: B023
+        )
         tail = [(s.name, tuple(s.args)) for s in plan[1:]]
         step = plan[0]
         before_exec = time.monotonic()
