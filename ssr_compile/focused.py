@@ -33,6 +33,8 @@ from .preimage import plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
 
 SOLVED = "solved"
+# Cost functions at most this expensive (StreamInfo.cost) are evaluated eagerly.
+EAGER_COST = 0.1
 
 
 @dataclass
@@ -271,11 +273,15 @@ def solve(
     values: ValueTable | None = None,
     progress: Callable[[str], None] | None = None,
     unit_cost: bool = False,
+    eager_cost: float = EAGER_COST,
 ) -> Solution:
     """Solve a PDDLStream problem with the Focused algorithm (see the module docstring).
 
     ``evaluated`` are real results kept from earlier calls (replanning, Algorithm 1);
     ``plan_tail``/``is_constant`` constrain the plan's structure (Algorithm 2).
+    Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
+    soon as their arguments are real (before planning), so the planner sees their real
+    values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
     Returns a :class:`Solution` with status "solved", "unsolvable" or "timeout".
     """
     from .planners import get_planner
@@ -298,6 +304,11 @@ def solve(
     }
     level = max(initial_level, 0)
     best_failure = "no plan"
+    eager = {
+        f.name
+        for f in streams.functions
+        if module.info_for(f.name).cost <= eager_cost
+    }
 
     def finish(status, plan=None, cost=None, certificate=(), deferred=(), message=""):
         stats.total_time = time.monotonic() - start
@@ -318,21 +329,26 @@ def solve(
             return finish("timeout", message=f"time limit of {time_limit:g} s reached")
         stats.iterations += 1
         stats.levels.append(level)
-        compiled = compile_problem(
-            domain,
-            streams,
-            problem,
-            caps=backend.capabilities,
-            level=level,
-            evaluated=ev.results,
-            disabled=ev.tried,
-            exhausted=ev.exhausted,
-            function_values=optimistic_values,
-            real_function_values=ev.real_functions,
-            plan_tail=plan_tail,
-            is_constant=is_constant,
-            unit_cost=unit_cost,
-        )
+        def compile_now():
+            return compile_problem(
+                domain,
+                streams,
+                problem,
+                caps=backend.capabilities,
+                level=level,
+                evaluated=ev.results,
+                disabled=ev.tried,
+                exhausted=ev.exhausted,
+                function_values=optimistic_values,
+                real_function_values=ev.real_functions,
+                plan_tail=plan_tail,
+                is_constant=is_constant,
+                unit_cost=unit_cost,
+            )
+
+        compiled = compile_now()
+        if eager and _evaluate_eagerly(compiled.instantiation, eager, ev):
+            compiled = compile_now()
         remaining = deadline - time.monotonic()
         bound = None if math.isinf(max_cost) else max_cost * compiled.scale
         result = backend.solve(
@@ -395,6 +411,26 @@ def solve(
             if not ok:
                 failed.update(res.outputs)
                 say(f"  {res.instance} failed")
+
+
+def _evaluate_eagerly(inst, names: set[str], ev: _Evaluation) -> bool:
+    """Evaluate the cheap cost-function terms (``names``) whose arguments and domain facts are
+    all real and that have no value yet; did any get one?"""
+    if inst is None:
+        return False
+    done = False
+    for term, res in inst.functions.items():
+        if (
+            res.optimistic
+            and res.instance.stream in names
+            and res.level == 0
+            and res.instance not in ev.outcomes
+            and not any(a in inst.objects for a in res.instance.inputs)
+        ):
+            ok = ev.evaluate(res, {})
+            ev.record(ok, res.instance.stream)
+            done = True
+    return done
 
 
 def _split_deferred(needed, pre, plan, inst, module, defer: bool):

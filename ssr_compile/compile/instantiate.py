@@ -103,11 +103,13 @@ def instantiate(
     taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
     levels: dict[S.Atom, int] = {}
     index: dict[str, list[S.Atom]] = defaultdict(list)
+    position: dict[S.Atom, int] = {}  # where each fact sits in its index list
 
     def add_fact(atom: S.Atom, lvl: int) -> bool:
         if atom in levels and levels[atom] <= lvl:
             return False
         if atom not in levels:
+            position[atom] = len(index[atom.pred])
             index[atom.pred].append(atom)
         levels[atom] = lvl
         return True
@@ -137,10 +139,15 @@ def instantiate(
         out.results.append(res)
 
     schemas = [(s, "test" if s.is_test else "stream") for s in streams.streams]
+    # Semi-naive: an instance first possible at depth d has its deepest domain fact at level
+    # d - 1, so depth d only joins through the facts that reached level d - 1 (``fresh``);
+    # the first depth joins through every real fact.
+    fresh: list[S.Atom] | None = None
     for depth in range(1, level + 1):
         made = []
         for stream, kind in schemas:
-            for binding, dom_facts in _matches(stream.inputs, stream.domain, index, levels):
+            found = []
+            for binding, dom_facts in _matches(stream.inputs, stream.domain, index, levels, fresh):
                 inst = Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
                 if inst in seen or inst in disabled:
                     continue
@@ -148,7 +155,12 @@ def instantiate(
                 if inst_level > depth:
                     continue
                 seen.add(inst)
-                made.append((stream, inst, binding, dom_facts, inst_level))
+                key = tuple(position[f] for f in dom_facts)
+                found.append((key, (stream, inst, binding, dom_facts, inst_level)))
+            if fresh is not None:
+                # The order of a full nested-loop join over the index (deterministic names).
+                found.sort(key=lambda x: x[0])
+            made.extend(m for _k, m in found)
         if len(seen) > MAX_INSTANCES:
             raise UnsupportedError(
                 f"optimistic instantiation made more than {MAX_INSTANCES} stream instances at "
@@ -180,12 +192,14 @@ def instantiate(
         _apply_rules(streams, index, add_fact, levels)
         if not made:
             break
+        fresh = [a for a, lvl in levels.items() if lvl == depth]
     else:
-        # The loop ran to the limit: were more instances possible?
+        # The loop ran to the limit: were more instances possible (through the facts of the
+        # last depth)?
         out.saturated = not any(
             True
             for stream, kind in schemas
-            for binding, _f in _matches(stream.inputs, stream.domain, index, levels)
+            for binding, _f in _matches(stream.inputs, stream.domain, index, levels, fresh)
             if Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
             not in seen | disabled
         )
@@ -213,9 +227,8 @@ def instantiate(
             out.functions[term] = res
             values.append(S.InitValue(term, S.Num(value)))
 
-    all_facts = [
-        a for a in levels if a not in set(f for f in problem.init if isinstance(f, S.Atom))
-    ]
+    initial = {f for f in problem.init if isinstance(f, S.Atom)}
+    all_facts = [a for a in levels if a not in initial]
     init = list(problem.init) + sorted(all_facts, key=_fact_order) + values
     objects = problem.objects + tuple(real_objects) + tuple(new_objects)
     out.problem = replace(problem, objects=objects, init=tuple(init))
@@ -267,11 +280,13 @@ def _ground(atom: S.Atom, binding: Mapping[str, str]) -> S.Atom:
     )
 
 
-def _matches(params, domain, index, levels):
+def _matches(params, domain, index, levels, fresh=None):
     """All bindings of ``params`` under which every atom of the conjunctive ``domain`` holds.
 
     Yields ``(binding, facts)``.  Equality atoms compare the bound names.  Parameters that
-    no atom mentions cannot be bound and give no match (as in PDDLStream).
+    no atom mentions cannot be bound and give no match (as in PDDLStream).  With ``fresh``
+    (a list of facts), only the bindings that use at least one of them (a binding may come
+    more than once: the callers skip instances already seen).
     """
     atoms = [a for a in S.conjuncts(domain)]
     for a in atoms:
@@ -283,24 +298,38 @@ def _matches(params, domain, index, levels):
             )
     positive = [a for a in atoms if a.pred != "="]
     equalities = [a for a in atoms if a.pred == "="]
-    # Most selective atoms first.
-    positive.sort(key=lambda a: len(index.get(a.pred, ())))
     names = [p.name for p in params]
 
-    def extend(i: int, binding: dict[str, str], used: list[S.Atom]):
-        if i == len(positive):
+    def extend(order, i: int, binding: dict[str, str], used: list[S.Atom]):
+        if i == len(order):
             if all(n in binding for n in names) and all(_eq_holds(e, binding) for e in equalities):
                 yield dict(binding), list(used)
             return
-        pattern = positive[i]
+        pattern = order[i]
         for fact in list(index.get(pattern.pred, ())):
             new = _unify(pattern, fact, binding)
             if new is not None:
                 used.append(fact)
-                yield from extend(i + 1, new, used)
+                yield from extend(order, i + 1, new, used)
                 used.pop()
 
-    yield from extend(0, {}, [])
+    # Most selective atoms first; facts are yielded in this order.
+    order = sorted(positive, key=lambda a: len(index.get(a.pred, ())))
+    if fresh is None:
+        yield from extend(order, 0, {}, [])
+        return
+    by_pred: dict[str, list[S.Atom]] = defaultdict(list)
+    for f in fresh:
+        by_pred[f.pred].append(f)
+    for k, pivot in enumerate(order):
+        rest = order[:k] + order[k + 1 :]
+        for fact in by_pred.get(pivot.pred, ()):
+            start = _unify(pivot, fact, {})
+            if start is None:
+                continue
+            for binding, used in extend(rest, 0, start, []):
+                used.insert(k, fact)
+                yield binding, used
 
 
 def _unify(pattern: S.Atom, fact: S.Atom, binding: dict[str, str]) -> dict[str, str] | None:
