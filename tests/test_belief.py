@@ -257,6 +257,33 @@ def test_no_reinvigoration_when_a_particle_explains_the_detection():
     assert post.poses.tolist() == pb.poses.tolist()
 
 
+def test_no_posterior_collapse_after_one_detection():
+    # Issue 11, fault 4: 100 particles per surface and a 1 cm sensor.  Plain resampling of the
+    # reweighted particles collapses onto one prior particle (std 0, centimetres off); the
+    # regularised posterior keeps the spread of the evidence (about the sensor's 1 cm) and is
+    # centred on the truth.
+    d1 = Surface("d1", (0.6, 0.0), (0.18, 0.3), 0.2)
+    d2 = Surface("d2", (0.6, 0.0), (0.18, 0.3), 0.53)
+    model = ObservationModel(p_fn=0.1, sigma=(0.01, 0.01, 0.01, math.radians(5)))
+    rng = np.random.default_rng(3)
+    errors, spreads, collapsed = [], [], 0
+    for _ in range(60):
+        pb = PoseBelief.uniform("o", [d1, d2], 200, rng, z_offset=0.02, by_area=False)
+        true = np.array([rng.uniform(0.45, 0.75), rng.uniform(-0.25, 0.25), 0.22, rng.uniform(-3, 3)])
+        z = true + rng.normal(size=4) * np.array(model.sigma)
+        plain = update(pb, z, np.ones(200, bool), model, rng=np.random.default_rng(0), rejuvenate=False)
+        collapsed += float(plain.std("d1")[:2].max()) < 1e-6
+        post = update(pb, z, np.ones(200, bool), model, rng=np.random.default_rng(0))
+        assert post.prob_surface("d1") > 0.95
+        _, est = post.point_estimate()
+        errors.append(float(np.linalg.norm(est[:2] - true[:2])))
+        spreads.append(float(post.std("d1")[:2].max()))
+        assert len(np.unique(post.poses[post.labels == 0], axis=0)) > 50  # no copies of one
+    assert collapsed > 0  # the fault is real without rejuvenation
+    assert min(spreads) > 0.004 and max(spreads) < 0.025  # honest: about the sensor noise
+    assert np.mean(errors) < 0.02 and max(errors) < 0.05
+
+
 def test_update_is_deterministic_without_rng():
     pb = PoseBelief.uniform("o", [A_SURF, SHELF], 300, np.random.default_rng(2), z_offset=0.05)
     z = (5.0, 0.0, 0.55, 0.0)

@@ -457,6 +457,94 @@ def _reinvigorate(
     return PoseBelief(belief.obj, belief.surfaces, labels, poses, weights, belief.z_offset)
 
 
+def kernel_bandwidth(belief: PoseBelief, scale: float | None = None) -> np.ndarray:
+    """Per-particle diagonal kernel covariance (N, 4) of the regularised filter: Silverman's
+    rule over the weighted spread of the particles *of the same surface* (so surfaces at
+    different heights never mix), ``h = (4 / (N (d + 2)))^(1 / (d + 4))`` with ``d = 4``.
+    A surface whose particles all coincide (a point belief) gets a zero kernel."""
+    n = len(belief)
+    h = (4.0 / (n * 6.0)) ** (1.0 / 8.0) if scale is None else float(scale)
+    out = np.zeros((n, 4))
+    for k in np.unique(belief.labels):
+        sel = belief.labels == k
+        w = belief.weights[sel]
+        if w.sum() <= 0:
+            continue
+        w = w / w.sum()
+        x = belief.poses[sel]
+        mean = w @ x
+        mean[3] = math.atan2(w @ np.sin(x[:, 3]), w @ np.cos(x[:, 3]))
+        dev = x - mean
+        dev[:, 3] = wrap_angle(dev[:, 3])
+        var = w @ dev**2
+        out[sel] = (h**2) * var
+    return out
+
+
+def _regularised_posterior(
+    belief: PoseBelief,
+    z: np.ndarray,
+    mask: np.ndarray,
+    model: ObservationModel,
+    rng: np.random.Generator,
+) -> PoseBelief | None:
+    """Posterior of a detection ``z`` for the prior seen as a kernel density
+    ``sum_i w_i N(x; x_i, H_i)`` (the regularised particle filter): a Gaussian mixture with
+    components ``N(m_i, S_i)``, ``S_i = H_i - H_i (H_i + Sigma)^-1 H_i``,
+    ``m_i = x_i + H_i (H_i + Sigma)^-1 (z - x_i)`` and weights ``w_i N(z; x_i, H_i + Sigma)``
+    (visible particles only).  ``N`` equally weighted particles are drawn from it, so the
+    reported spread is the posterior's (about the sensor noise after one detection from a
+    broad prior), never the zero spread of copies of one prior particle.  Diagonal ``Sigma``
+    only (else ``None``: the caller resamples plainly).  ``None`` too when no visible particle
+    has positive weight."""
+    cov = model.covariance
+    if not np.allclose(cov, np.diag(np.diag(cov))):
+        return None
+    sig = np.diag(cov)
+    H = kernel_bandwidth(belief)
+    tot = H + sig  # (N, 4)
+    d = z[None, :] - belief.poses
+    d[:, 3] = wrap_angle(d[:, 3])
+    with np.errstate(divide="ignore"):
+        log_w = (
+            np.log(belief.weights)
+            - 0.5 * np.sum(d**2 / tot + np.log(2 * np.pi * tot), axis=1)
+        )
+    log_w = np.where(mask, log_w, -np.inf)
+    total = logsumexp(log_w)
+    if not math.isfinite(total):
+        return None
+    w = np.exp(log_w - total)
+    n = len(belief)
+    idx = systematic_resample(w, rng, n)
+    gain = H[idx] / tot[idx]
+    mean = belief.poses[idx] + gain * d[idx]
+    var = H[idx] - gain * H[idx]
+    poses = mean + rng.normal(size=(n, 4)) * np.sqrt(np.maximum(var, 0.0))
+    labels = belief.labels[idx]
+    for k in np.unique(labels):  # stay on the surface: clip x, y into it, z at its height
+        sel = labels == k
+        surf = belief.surfaces[k]
+        poses[sel, :2] = surf.clip(poses[sel, :2])
+    poses[:, 3] = wrap_angle(poses[:, 3])
+    return PoseBelief(belief.obj, belief.surfaces, labels, poses, None, belief.z_offset)
+
+
+def _jitter(belief: PoseBelief, rng: np.random.Generator) -> PoseBelief:
+    """Rejuvenation after plain resampling: each copy moves by a draw of the regularised
+    filter's kernel (:func:`kernel_bandwidth`), staying on its surface."""
+    H = kernel_bandwidth(belief)
+    if not np.any(H > 0):
+        return belief
+    poses = belief.poses + rng.normal(size=belief.poses.shape) * np.sqrt(H)
+    for k in np.unique(belief.labels):
+        sel = belief.labels == k
+        poses[sel, :2] = belief.surfaces[k].clip(poses[sel, :2])
+    return PoseBelief(
+        belief.obj, belief.surfaces, belief.labels, poses, belief.weights, belief.z_offset
+    )
+
+
 def update(
     belief: PoseBelief,
     detection: np.ndarray | Sequence[float] | None,
@@ -468,6 +556,7 @@ def update(
     reinvig_mahalanobis: float = 5.0,
     reinvig_frac: float = 0.5,
     reinvig_keep_mass: float = 0.01,
+    rejuvenate: bool = True,
 ) -> PoseBelief:
     """Bayesian filter step for one object (paper §V-B detection model), in log space.
 
@@ -492,7 +581,12 @@ def update(
       does), carrying mass ``1 - reinvig_keep_mass``; the rest keep the old hypotheses with the
       small mass ``reinvig_keep_mass`` (resampled from the prior), so that a wrong detection
       can still be recovered from.
-    * Resampling (systematic) when ESS < ``resample_frac * N``.
+    * Resampling (systematic) when ESS < ``resample_frac * N``, then *rejuvenation* (unless
+      ``rejuvenate`` is False): after a detection the particles are drawn from the
+      regularised posterior (:func:`_regularised_posterior`: the prior as a kernel density,
+      so the posterior keeps the spread the evidence supports instead of collapsing onto
+      copies of the one prior particle nearest ``z``); after a miss each copy is jittered by
+      the kernel (:func:`_jitter`).
 
     ``rng`` drives reinvigoration and resampling; when ``None`` it is seeded from the belief's
     digest and the detection, so the update is a deterministic function of its inputs (as the
@@ -526,9 +620,29 @@ def update(
             deprived = not math.isfinite(logsumexp(post)) or (
                 d2.size == 0 or float(d2.min()) > reinvig_mahalanobis**2
             )
+            regularised = rejuvenate and np.allclose(
+                model.covariance, np.diag(np.diag(model.covariance))
+            )
+            if deprived and regularised and d2.size:
+                # a particle's kernel may still explain z: then no particle is missing
+                tot = kernel_bandwidth(belief)[support] + np.diag(model.covariance)
+                dk = z[None, :] - belief.poses[support]
+                dk[:, 3] = wrap_angle(dk[:, 3])
+                deprived = float(np.min(np.sum(dk**2 / tot, axis=1))) > reinvig_mahalanobis**2
+                if not deprived:
+                    reg = _regularised_posterior(belief, z, mask, model, rng)
+                    if reg is not None:
+                        return reg
+                    deprived = True
             if deprived:
                 return _reinvigorate(belief, z, model, rng, reinvig_frac, reinvig_keep_mass)
             out = belief.with_log_weights(post)
+            if regularised and out.ess() < resample_frac * len(out):
+                reg = _regularised_posterior(belief, z, mask, model, rng)
+                if reg is not None:
+                    return reg
     if out.ess() < resample_frac * len(out):
         out = out.resample(rng)
+        if rejuvenate:
+            out = _jitter(out, rng)
     return out
