@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from . import syntax as S
-from .compile.instantiate import Instance, Result
+from .compile.instantiate import Instance, Result, real_function_terms
 from .compile.pipeline import compile_problem
 from .errors import SSRError, StreamError
 from .preimage import plan_preimage, stream_plan
@@ -54,6 +54,10 @@ class Statistics:
     stream_time: float = 0.0
     total_time: float = 0.0
     streams: dict[str, StreamStats] = field(default_factory=dict)
+    # Per iteration: the compiled problem handed to the planner (objects, facts, function
+    # values, ground actions when the planner reports them, else None).
+    sizes: list[tuple[int, int, int, int | None]] = field(default_factory=list)
+    compile_time: float = 0.0
 
     def stream(self, name: str) -> StreamStats:
         return self.streams.setdefault(name, StreamStats())
@@ -66,6 +70,8 @@ class Statistics:
             "planner_time": round(self.planner_time, 4),
             "stream_time": round(self.stream_time, 4),
             "total_time": round(self.total_time, 4),
+            "compile_time": round(self.compile_time, 4),
+            "sizes": [list(z) for z in self.sizes],
             "streams": {
                 k: vars(v) | {"time": round(v.time, 4)} for k, v in sorted(self.streams.items())
             },
@@ -304,6 +310,7 @@ def solve(
     }
     level = max(initial_level, 0)
     best_failure = "no plan"
+    eager_seen = -1  # number of real results when cheap functions were last evaluated
     eager = {
         f.name
         for f in streams.functions
@@ -346,9 +353,12 @@ def solve(
                 unit_cost=unit_cost,
             )
 
+        if eager and len(ev.results) != eager_seen:
+            eager_seen = len(ev.results)
+            _evaluate_eagerly(streams, problem, eager, ev)
+        started = time.perf_counter()
         compiled = compile_now()
-        if eager and _evaluate_eagerly(compiled.instantiation, eager, ev):
-            compiled = compile_now()
+        stats.compile_time += time.perf_counter() - started
         remaining = deadline - time.monotonic()
         bound = None if math.isinf(max_cost) else max_cost * compiled.scale
         result = backend.solve(
@@ -356,8 +366,13 @@ def solve(
         )
         stats.planner_calls += 1
         stats.planner_time += result.time
+        size = _size(compiled.problem, getattr(backend, "last_operators", None))
+        stats.sizes.append(size)
         say(
-            f"iteration {stats.iterations}: level {level}, planner {result.status} in {result.time:.3f} s"
+            f"iteration {stats.iterations}: level {level}, problem {size[0]} objects, "
+            f"{size[1]} facts, {size[2]} values"
+            + (f", {size[3]} ground actions" if size[3] is not None else "")
+            + f"; planner {result.status} in {result.time:.3f} s"
         )
         if result.status == "error":
             raise SSRError(f"planner {backend.name} failed: {result.message}")
@@ -413,24 +428,17 @@ def solve(
                 say(f"  {res.instance} failed")
 
 
-def _evaluate_eagerly(inst, names: set[str], ev: _Evaluation) -> bool:
-    """Evaluate the cheap cost-function terms (``names``) whose arguments and domain facts are
-    all real and that have no value yet; did any get one?"""
-    if inst is None:
-        return False
-    done = False
-    for term, res in inst.functions.items():
-        if (
-            res.optimistic
-            and res.instance.stream in names
-            and res.level == 0
-            and res.instance not in ev.outcomes
-            and not any(a in inst.objects for a in res.instance.inputs)
-        ):
-            ok = ev.evaluate(res, {})
-            ev.record(ok, res.instance.stream)
-            done = True
-    return done
+def _evaluate_eagerly(
+    streams: S.StreamFile, problem: S.Problem, names: set[str], ev: _Evaluation
+) -> None:
+    """Evaluate the cheap cost-function terms (``names``) whose domain holds in the real facts
+    and that have no value yet."""
+    for inst in real_function_terms(streams, problem, ev.results, names):
+        if inst in ev.outcomes:
+            continue
+        res = Result(inst, (), (), (), 0)
+        ok = ev.evaluate(res, {})
+        ev.record(ok, inst.stream)
 
 
 def _split_deferred(needed, pre, plan, inst, module, defer: bool):
@@ -485,6 +493,11 @@ def _producers(results: list[Result], inst) -> dict[int, list[int]]:
     return out
 
 
+def _size(problem: S.Problem, operators: int | None) -> tuple[int, int, int, int | None]:
+    facts = sum(1 for f in problem.init if isinstance(f, S.Atom))
+    return (len(problem.objects), facts, len(problem.init) - facts, operators)
+
+
 def _steps(plan, values: ValueTable, deferred_objects: set[str]) -> list[Step]:
     steps = []
     for name, args in plan:
@@ -516,6 +529,14 @@ def print_solution(solution: Solution, out=sys.stdout) -> None:
         f"total {st.total_time:.3f} s",
         file=out,
     )
+    if st.sizes:
+        big = max(st.sizes, key=lambda z: (z[1], z[0]))
+        print(
+            f"largest compiled problem: {big[0]} objects, {big[1]} facts, {big[2]} values"
+            + (f", {big[3]} ground actions" if big[3] is not None else "")
+            + f"; compilation {st.compile_time:.3f} s",
+            file=out,
+        )
     for name, s in sorted(st.streams.items()):
         print(
             f"  {name:24s} calls {s.calls:4d}  ok {s.successes:4d}  failed {s.failures:4d}  {s.time:8.4f} s",

@@ -235,6 +235,41 @@ def instantiate(
     return out
 
 
+def real_function_terms(
+    streams: S.StreamFile,
+    problem: S.Problem,
+    evaluated: Iterable[Result] = (),
+    names: Iterable[str] | None = None,
+) -> list[Instance]:
+    """The cost-function terms (of the functions ``names``, default all) whose domain holds
+    in the real facts alone: the problem's and those of the ``evaluated`` results."""
+    wanted = None if names is None else set(names)
+    levels: dict[S.Atom, int] = {}
+    index: dict[str, list[S.Atom]] = defaultdict(list)
+
+    def add_fact(atom: S.Atom, lvl: int) -> bool:
+        if atom in levels:
+            return False
+        levels[atom] = lvl
+        index[atom.pred].append(atom)
+        return True
+
+    for fact in problem.init:
+        if isinstance(fact, S.Atom):
+            add_fact(fact, 0)
+    for res in evaluated:
+        for atom in res.certified:
+            add_fact(atom, 0)
+    _apply_rules(streams, index, add_fact, levels)
+    out = []
+    for fn in streams.functions:
+        if wanted is not None and fn.name not in wanted:
+            continue
+        for binding, _facts in _matches(fn.params, fn.domain, index, levels):
+            out.append(Instance(fn.name, tuple(binding[p.name] for p in fn.params), "function"))
+    return out
+
+
 def _fact_order(a: S.Atom):
     return (a.pred, tuple(t.name for t in a.args))
 

@@ -107,6 +107,7 @@ def _translate(domain_path: str, problem_path: str, sas_path: str) -> dict:
     return {
         "unsolvable": reasons[0] if reasons else None,
         "axioms": len(sas_task.axioms),
+        "operators": len(sas_task.operators),
         "conditional_effects": any(c for op in sas_task.operators for *_, c in op.pre_post),
     }
 
@@ -165,6 +166,7 @@ class FastDownward:
         import fast_downward.translate.main  # noqa: F401
 
         self.binary = search_binary()
+        self.last_operators: int | None = None  # ground actions of the last translated task
 
     def _search_option(self, info: dict, cost_bound: float | None) -> str:
         template = SEARCHES.get(self.search, self.search)
@@ -184,6 +186,7 @@ class FastDownward:
     ) -> PlanResult:
         clock = Clock(time_limit)
         tmp = ""
+        self.last_operators = None
 
         def result(status, message="", actions=None, cost=None):
             if self.keep_files and tmp:
@@ -218,6 +221,7 @@ class FastDownward:
                 return result(
                     ERROR, f"translator failed: {info}" + (f" ({detail})" if detail else "")
                 )
+            self.last_operators = info.get("operators")
             if info["unsolvable"]:
                 return result(UNSOLVABLE, f"translator: {info['unsolvable']}")
             try:
