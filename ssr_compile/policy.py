@@ -120,6 +120,9 @@ class PolicySettings:
     initial_level: int = 1
     max_level: int = 8
     max_cost: float = math.inf  # c*: plans must be cheaper
+    # Measurement only (bench/policy_bench.py): when a constrained attempt holds, also solve
+    # the same problem without constraints and record its time (not counted, not used).
+    compare_unconstrained: bool = False
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
@@ -177,6 +180,7 @@ class Cycle:
     overhead_time: float = 0.0  # the policy's own time (determinize, constants, bookkeeping)
     constrained_time: float = 0.0  # planning time of the constrained attempt alone
     unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
+    comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
 
     def as_dict(self) -> dict:
         d = dict(vars(self))
@@ -320,6 +324,7 @@ def run_policy(
             return finish(False, f"planning budget of {settings.budget:g} s exhausted")
         problem, module = agent.problem()
         constrained = "-"
+        comparison: float | None = None
         solution: Solution | None = None
         spent = {"c": 0.0, "u": 0.0}
         streams_called = planners_called = 0
@@ -360,6 +365,20 @@ def run_policy(
             )
             if solution.solved:
                 constrained = "held"
+                if settings.compare_unconstrained:
+                    other = solve(
+                        agent.domain,
+                        agent.streams,
+                        problem,
+                        module,
+                        planner=settings.planner,
+                        time_limit=settings.unconstrained_time,
+                        max_cost=settings.max_cost,
+                        defer=settings.defer,
+                        initial_level=settings.initial_level,
+                        max_level=settings.max_level,
+                    )
+                    comparison = other.stats.total_time if other.solved else None
             else:
                 constrained = "timeout" if solution.status == "timeout" else "fell back"
                 solution = None
@@ -417,8 +436,9 @@ def run_policy(
         record = _record(index, str(step), constrained, spent, streams_called, planners_called,
                          solution, agent, cycle_start)
         record.execution_time = after_exec - before_exec
+        record.comparison_time = comparison
         record.update_time = after_update - after_exec
-        total = time.monotonic() - cycle_start
+        total = time.monotonic() - cycle_start - (comparison or 0.0)
         record.overhead_time = max(
             total - record.planning_time - record.execution_time - record.update_time, 0.0
         )
