@@ -9,15 +9,19 @@ imports (planners, PyBullet) happen inside the commands that need them, so ``che
 from __future__ import annotations
 
 import argparse
+import math
 import os
+import signal
 import sys
 import tempfile
+import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
 from . import __version__
 from . import syntax as S
-from .errors import SSRError
+from .errors import SSRError, TimeLimitReached
 
 COMMANDS: dict[
     str, tuple[Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int], str]
@@ -31,16 +35,275 @@ def register(name: str, help: str, configure, run) -> None:
 
 def write_atomically(path: str | Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file, so nothing is left half-written."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    write_files_atomically({Path(path): text})
+
+
+def write_files_atomically(files: dict[Path, str]) -> None:
+    """Write several files as a unit: all of them, or (on any error) none of them.
+
+    Each file goes through a temporary file beside it and is then moved in place.  Only a
+    regular file is ever replaced: a symlink, FIFO, device or folder at an output path is bad
+    input (an SSRError, exit 2), never written through nor replaced.  A new file gets the mode
+    the umask gives (like ``open``); an existing file keeps its mode.  Filesystem errors are
+    reported as SSRErrors naming the path (exit 1 for a full disk).
+    """
+    files = {Path(p): t for p, t in files.items()}
+    for path in files:
+        _check_parents(path)
+        _refuse_non_regular(path)
+    temps: dict[Path, str] = {}
+    backups: dict[Path, str | None] = {}  # path -> hard link to its old content (None: new)
+    done: list[Path] = []
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        for path, text in files.items():
+            _make_parent(path)
+            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+            temps[path] = tmp
+            with os.fdopen(fd, "w", encoding="utf-8") as fh:
+                fh.write(text)
+            os.chmod(tmp, _mode_for(path))
+        for path in files:
+            _refuse_non_regular(path)  # again, just before replacing
+            backups[path] = _backup(path)
+        for path, tmp in temps.items():
+            os.replace(tmp, path)
+            done.append(path)
+    except BaseException as e:
+        for path in reversed(done):  # put back what was there
+            old = backups.get(path)
+            try:
+                if old is None:
+                    path.unlink()
+                else:
+                    os.replace(old, path)
+                    backups[path] = None
+            except OSError:
+                pass
+        for tmp in temps.values():
+            Path(tmp).unlink(missing_ok=True)
+        for old in backups.values():
+            if old is not None:
+                Path(old).unlink(missing_ok=True)
+        if isinstance(e, OSError):
+            raise _write_error(e, e.filename or next(iter(files))) from None
         raise
+    for old in backups.values():
+        if old is not None:
+            Path(old).unlink(missing_ok=True)
+
+
+def _refuse_non_regular(path: Path) -> None:
+    import stat
+
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except OSError as e:
+        raise _write_error(e, path) from None
+    if stat.S_ISREG(st.st_mode):
+        return
+    kinds = [
+        (stat.S_ISLNK, "a symbolic link"),
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ]
+    kind = next((word for test, word in kinds if test(st.st_mode)), "not a regular file")
+    raise SSRError(
+        f"the output path is {kind}; only a regular file is replaced "
+        "(remove it or choose another output path)",
+        file=str(path),
+    )
+
+
+def _check_parents(path: Path) -> None:
+    """The nearest existing folder above ``path`` must be a folder (not a file)."""
+    for parent in path.parents:
+        if os.path.lexists(parent):
+            if not parent.is_dir():
+                raise SSRError(
+                    "is not a folder (an output is to be written into it)", file=str(parent)
+                )
+            return
+
+
+def _make_parent(path: Path) -> None:
+    _check_parents(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise SSRError(
+            "is not a folder (an output is to be written into it)", file=str(path.parent)
+        ) from None
+
+
+def _umask() -> int:
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)  # no way to read it without setting it (not thread-safe)
+    os.umask(mask)
+    return mask
+
+
+def _mode_for(path: Path) -> int:
+    """An existing file's mode, or the mode ``open`` would give a new file."""
+    import stat
+
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return 0o666 & ~_umask()
+
+
+def _backup(path: Path) -> str | None:
+    """A hard link to ``path``'s present content beside it (None if there is no file)."""
+    if not os.path.lexists(path):
+        return None
+    for i in range(100):
+        name = str(path.parent / f".{path.name}.{os.getpid()}.{i}.bak")
+        try:
+            os.link(path, name)
+            return name
+        except FileExistsError:
+            continue
+        except OSError:  # no hard links here: a copy
+            import shutil
+
+            shutil.copy2(path, name)
+            return name
+    raise SSRError("cannot make a backup before replacing it", file=str(path))
+
+
+def _write_error(e: OSError, path) -> SSRError:
+    import errno
+
+    err = SSRError(f"cannot write: {e.strerror or e}", file=str(path))
+    if e.errno in (errno.ENOSPC, errno.EDQUOT):
+        err.exit_code = 1
+    return err
+
+
+# ---------------------------------------------------------------- numeric options
+
+# One validation for every numeric option, by its destination name: the commands use these as
+# argparse ``type=`` functions, and build_parser() applies them to any command's option of the
+# same name, so that a bad number is bad input (exit 2, one line) everywhere.
+
+
+def seconds(text: str) -> float:
+    """A time limit: a finite number of seconds greater than 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(
+            f"expected a finite number of seconds greater than 0, got '{text}'"
+        )
+    return value
+
+
+def count(text: str, least: int = 0, most: int | None = None, what: str = "a whole number") -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, got '{text}'") from None
+    if value < least or (most is not None and value > most):
+        bound = f"from {least} to {most}" if most is not None else f"{least} or more"
+        raise argparse.ArgumentTypeError(f"expected {what} {bound}, got '{text}'")
+    return value
+
+
+def level(text: str) -> int:
+    """An instantiation level: 0 or more."""
+    return count(text, 0, what="a level")
+
+
+def seed(text: str) -> int:
+    """A random seed: 0 .. 2**32 - 1 (what numpy's generators accept)."""
+    return count(text, 0, 2**32 - 1, what="a seed")
+
+
+def positive_count(text: str) -> int:
+    return count(text, 1)
+
+
+def cost_bound(text: str) -> float:
+    """A cost bound: a number greater than 0 (``inf``: no bound)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a cost, got '{text}'") from None
+    if math.isnan(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a cost greater than 0, got '{text}'")
+    return value
+
+
+NUMERIC_OPTIONS = {
+    "time_limit": seconds,
+    "level": level,
+    "max_level": level,
+    "seed": seed,
+    "max_cost": cost_bound,
+    "particles": positive_count,
+}
+
+
+def _validate_numbers(p: argparse.ArgumentParser) -> None:
+    for action in p._actions:  # argparse keeps no public list of a parser's options
+        check = NUMERIC_OPTIONS.get(action.dest)
+        if check is not None and action.type in (int, float, None) and action.option_strings:
+            action.type = check
+
+
+class time_limit:
+    """Bound a block of the main thread by ``limit`` seconds: when they pass, raise
+    :class:`TimeLimitReached` wherever the block is (compiling, calling a stream, waiting for
+    a planner, whose processes are then killed as on Ctrl-C).  No-op outside the main thread or
+    without ``setitimer``; ``limit`` None or infinite: no bound."""
+
+    def __init__(self, limit: float | None):
+        self.limit = limit
+        self.active = False
+
+    def __enter__(self):
+        if (
+            self.limit is None
+            or not math.isfinite(self.limit)
+            or not hasattr(signal, "setitimer")
+            or threading.current_thread() is not threading.main_thread()
+        ):
+            return self
+        self.saved = signal.signal(signal.SIGALRM, self._fire)
+        outer = signal.setitimer(signal.ITIMER_REAL, max(self.limit, 0.001))[0]
+        self.outer_deadline = time.monotonic() + outer if outer > 0 else None
+        if outer > 0 and outer < self.limit:  # an enclosing limit that passes first
+            signal.setitimer(signal.ITIMER_REAL, outer)
+        self.active = True
+        return self
+
+    def _fire(self, signum, frame):
+        from .errors import TimeLimitReached
+
+        raise TimeLimitReached(self.limit)
+
+    def __exit__(self, *exc):
+        if self.active:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, self.saved)
+            if self.outer_deadline is not None:  # an enclosing limit: let it run on
+                left = self.outer_deadline - time.monotonic()
+                signal.setitimer(signal.ITIMER_REAL, max(left, 0.001))
+            self.active = False
+        return False
 
 
 # ---------------------------------------------------------------- check
@@ -229,6 +492,7 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (configure, _run, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         configure(p)
+        _validate_numbers(p)
     return parser
 
 
@@ -249,6 +513,37 @@ def _load_command_modules() -> None:
                 raise
 
 
+class _signals_as_interrupts:
+    """SIGTERM and SIGHUP raise :class:`Terminated` (a KeyboardInterrupt) in the main thread
+    while a command runs, so they clean up as SIGINT does: planner processes killed, temporary
+    folders removed.  A signal the process was started ignoring (nohup) stays ignored."""
+
+    def __enter__(self):
+        self.saved = {}
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        for name in ("SIGTERM", "SIGHUP"):
+            signum = getattr(signal, name, None)
+            if signum is None or signal.getsignal(signum) == signal.SIG_IGN:
+                continue
+            self.saved[signum] = signal.signal(signum, _terminate)
+        return self
+
+    def __exit__(self, *exc):
+        for signum, handler in self.saved.items():
+            signal.signal(signum, handler)
+        return False
+
+
+def _terminate(signum, frame):
+    from .errors import Terminated
+
+    # Once: the cleanup that the exception starts is not itself interrupted by a second one.
+    for other in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(other, signal.SIG_IGN)
+    raise Terminated(signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
@@ -261,13 +556,21 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     _configure, run, _help = COMMANDS[args.command]
     try:
-        return run(args)
+        with _signals_as_interrupts():
+            return run(args)
     except SSRError as e:
         print(str(e), file=sys.stderr)
         return e.exit_code
-    except KeyboardInterrupt:
-        print("ssr-compile: interrupted", file=sys.stderr)
-        return 130
+    except TimeLimitReached as e:
+        print(f"ssr-compile: time limit of {e.seconds:g} s reached", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as e:
+        signum = getattr(e, "signum", signal.SIGINT)
+        if signum == signal.SIGINT:
+            print("ssr-compile: interrupted", file=sys.stderr)
+        else:
+            print(f"ssr-compile: terminated ({signal.Signals(signum).name})", file=sys.stderr)
+        return 128 + signum
     except BrokenPipeError:
         return 0
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 
+from . import cli
 from . import syntax as S
-from .cli import load_files, register, write_atomically
+from .cli import load_files, register, write_files_atomically
 from .errors import SSRError
 
 
@@ -20,7 +22,7 @@ def _add_inputs(p: argparse.ArgumentParser, problem_optional: bool) -> None:
     )
     p.add_argument(
         "--level",
-        type=int,
+        type=cli.level,
         default=3,
         metavar="N",
         help="optimistic instantiation depth: stream instances whose inputs need more than N "
@@ -176,8 +178,8 @@ def _run_compile(args: argparse.Namespace) -> int:
             "instances": len(inst.results),
             "optimistic objects": len(inst.objects),
         }
-    for name, text in files.items():
-        write_atomically(out / name, text)
+    # The outputs are one unit: all written, or (on any error) none of them.
+    write_files_atomically({out / name: text for name, text in files.items()})
     for w in warnings:
         print(w, file=sys.stderr)
     print(f"wrote {', '.join(str(out / n) for n in files)}")
@@ -198,10 +200,11 @@ def _configure_plan(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--time-limit",
-        type=float,
+        type=cli.seconds,
         default=60.0,
         metavar="S",
-        help="planner time limit in seconds (default 60)",
+        help="time limit in seconds for the whole command: reading, compiling, planning "
+        "(default 60)",
     )
     p.add_argument("--unit-cost", action="store_true", help="ignore action costs")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
@@ -216,21 +219,51 @@ def run_plan(args: argparse.Namespace) -> int:
 
 def _run_plan(args: argparse.Namespace) -> int:
     from .compile.pipeline import compile_problem
+    from .errors import TimeLimitReached
     from .planners import get_planner
+    from .planners.base import TIMEOUT, PlanResult
     from .preimage import plan_preimage, stream_plan
 
     warnings: list[str] = []
-    domain, streams, problem = load_inputs(args, warnings)
-    backend = get_planner(args.planner)
-    compiled = compile_problem(
-        domain,
-        streams,
-        problem,
-        caps=backend.capabilities,
-        level=args.level,
-        unit_cost=args.unit_cost,
-    )
-    result = backend.solve(compiled.domain, compiled.problem, time_limit=args.time_limit)
+    start = time.monotonic()
+    phase = "reading the files"
+    # The limit bounds the whole command; the planner gets what is left of it and stops on its
+    # own, the alarm (a little later) stops reading and compiling.
+    try:
+        with cli.time_limit(args.time_limit + _GRACE):
+            domain, streams, problem = load_inputs(args, warnings)
+            backend = get_planner(args.planner)
+            phase = "compiling"
+            compiled = compile_problem(
+                domain,
+                streams,
+                problem,
+                caps=backend.capabilities,
+                level=args.level,
+                unit_cost=args.unit_cost,
+            )
+            phase = "planning"
+            left = args.time_limit - (time.monotonic() - start)
+            if left <= 0:
+                raise TimeLimitReached(args.time_limit)
+            result = backend.solve(compiled.domain, compiled.problem, time_limit=left)
+    except TimeLimitReached:
+        for w in warnings:
+            print(w, file=sys.stderr)
+        message = f"time limit of {args.time_limit:g} s reached while {phase}"
+        result = PlanResult(TIMEOUT, None, None, time.monotonic() - start, args.planner, message)
+        if args.json:
+            report = {
+                "status": TIMEOUT,
+                "planner": args.planner,
+                "time": round(result.time, 4),
+                "level": args.level,
+                "message": message,
+            }
+            print(json.dumps(report, indent=1))
+        else:
+            print(f"no plan ({TIMEOUT}) at level {args.level}: {message}")
+        return 1
     for w in warnings:
         print(w, file=sys.stderr)
     if result.status == "error":
@@ -275,6 +308,11 @@ def _run_plan(args: argparse.Namespace) -> int:
     else:
         print(f"no plan ({result.status}) at level {args.level}: {result.message}")
     return 0 if result.solved else 1
+
+
+# A backend stops itself at its limit (within about a second); the alarm that bounds reading
+# and compiling fires this much later, so that it does not cut a backend's own answer short.
+_GRACE = 1.0
 
 
 # ---------------------------------------------------------------- planners

@@ -6,10 +6,12 @@ import argparse
 import json
 import math
 import sys
+import time
 from pathlib import Path
 
+from . import cli
 from .cli import register
-from .errors import SSRError
+from .errors import SSRError, TimeLimitReached
 
 try:  # Python 3.11+
     import tomllib
@@ -40,19 +42,21 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--time-limit",
-        type=float,
+        type=cli.seconds,
         metavar="S",
         help="time limit in seconds for each problem (default 60)",
     )
     p.add_argument(
         "--max-cost",
-        type=float,
+        type=cli.cost_bound,
         metavar="C",
         help="only accept plans cheaper than C (the paper's c*)",
     )
-    p.add_argument("--level", type=int, metavar="N", help="first instantiation level (default 1)")
     p.add_argument(
-        "--max-level", type=int, metavar="N", help="give up above this level (default 8)"
+        "--level", type=cli.level, metavar="N", help="first instantiation level (default 1)"
+    )
+    p.add_argument(
+        "--max-level", type=cli.level, metavar="N", help="give up above this level (default 8)"
     )
     p.add_argument(
         "--defer",
@@ -61,7 +65,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--seed",
-        type=int,
+        type=cli.seed,
         default=0,
         metavar="N",
         help="seed for the streams module's random numbers (default 0)",
@@ -144,10 +148,22 @@ def run(args: argparse.Namespace) -> int:
     if not module_spec:
         raise SSRError('example.toml does not name a streams module (streams = "...")')
     planner = args.planner or config.get("planner", "fd")
-    time_limit = args.time_limit or float(config.get("time_limit", 60.0))
+
+    def setting(name, default, check):
+        value = getattr(args, name)
+        if value is not None:
+            return value
+        if name not in config:
+            return default
+        try:  # example.toml's numbers pass the same validation as the options
+            return check(str(config[name]))
+        except argparse.ArgumentTypeError as e:
+            raise SSRError(f"{name} = {config[name]!r}: {e}", file="example.toml") from None
+
+    time_limit = setting("time_limit", 60.0, cli.seconds)
     defer = args.defer or bool(config.get("defer", False))
-    level = args.level if args.level is not None else int(config.get("level", 1))
-    max_level = args.max_level if args.max_level is not None else int(config.get("max_level", 8))
+    level = setting("level", 1, cli.level)
+    max_level = setting("max_level", 8, cli.level)
     max_cost = args.max_cost if args.max_cost is not None else math.inf
     results = []
     status = 0
@@ -156,25 +172,44 @@ def run(args: argparse.Namespace) -> int:
         ns = argparse.Namespace(
             domain=str(domain_path), stream=str(stream_path), problem=str(problem_path)
         )
-        domain, streams, problem = load_inputs(ns, warnings)
-        module = module_for_problem(module_spec, problem_path, args.seed)
-        module.check_against(streams, str(stream_path))
-        progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
-        for w in warnings if args.verbose else ():
-            print(w, file=sys.stderr)
-        solution = solve(
-            domain,
-            streams,
-            problem,
-            module,
-            planner=planner,
-            time_limit=time_limit,
-            max_cost=max_cost,
-            defer=defer,
-            initial_level=level,
-            max_level=max_level,
-            progress=progress,
-        )
+        start = time.monotonic()
+        # The limit covers the whole problem: reading, the streams module, solving.  The solver
+        # stops itself at its deadline; the alarm (a little later) stops whatever it is stuck
+        # in, such as a stream that never returns.
+        try:
+            with cli.time_limit(time_limit + _GRACE):
+                domain, streams, problem = load_inputs(ns, warnings)
+                module = module_for_problem(module_spec, problem_path, args.seed)
+                module.check_against(streams, str(stream_path))
+                progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
+                for w in warnings if args.verbose else ():
+                    print(w, file=sys.stderr)
+                left = time_limit - (time.monotonic() - start)
+                if left <= 0:
+                    raise TimeLimitReached(time_limit)
+                solution = solve(
+                    domain,
+                    streams,
+                    problem,
+                    module,
+                    planner=planner,
+                    time_limit=left,
+                    max_cost=max_cost,
+                    defer=defer,
+                    initial_level=level,
+                    max_level=max_level,
+                    progress=progress,
+                )
+        except TimeLimitReached as e:
+            status = 1
+            message = f"time limit of {time_limit:g} s reached" + _where(e)
+            if args.json:
+                results.append(_timeout_json(problem_path, message, time.monotonic() - start))
+            else:
+                if len(jobs) > 1:
+                    print(f"== {problem_path}")
+                print(f"no plan: {message}")
+            continue
         if not solution.solved:
             status = 1
         if args.json:
@@ -186,6 +221,42 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(results if len(results) > 1 else results[0], indent=1, default=str))
     return status
+
+
+# The solver stops itself at its deadline; the alarm that stops a stuck stream (or reading,
+# or the streams module) fires this much later, so that it does not cut the solver short.
+_GRACE = 1.0
+
+
+def _where(e: BaseException) -> str:
+    """Which stream was running when the time limit passed (from the traceback), if any."""
+    from . import stream as stream_module
+
+    name = None
+    tb = e.__traceback__
+    while tb is not None:
+        frame = tb.tb_frame
+        if frame.f_code.co_filename == stream_module.__file__:
+            local = frame.f_locals
+            found = local.get("name")
+            if found is None and isinstance(local.get("self"), stream_module.Generator):
+                found = local["self"].name
+            if isinstance(found, str):
+                name = found
+        tb = tb.tb_next
+    return f" while stream '{name}' was running (it overran the limit)" if name else ""
+
+
+def _timeout_json(path, message: str, elapsed: float) -> dict:
+    return {
+        "problem": str(path),
+        "status": "timeout",
+        "message": message,
+        "cost": None,
+        "plan": [],
+        "certificate": [],
+        "stats": {"total_time": round(elapsed, 4)},
+    }
 
 
 def _as_json(path, solution) -> dict:

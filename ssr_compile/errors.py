@@ -71,6 +71,27 @@ class StreamError(SSRError):
     """A streams module is missing, fails to import, or lacks a declared stream."""
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised in the main thread like SIGINT's KeyboardInterrupt, so that
+    every cleanup that runs on Ctrl-C (planner processes killed, temporary folders removed)
+    runs for them too.  The CLI exits with 128 + the signal's number."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+class TimeLimitReached(BaseException):
+    """A command's ``--time-limit`` passed (raised by the CLI's alarm in the main thread).
+
+    A BaseException, like KeyboardInterrupt, so that no ``except Exception`` in a stream or a
+    backend takes it for an error of its own: the cleanup that runs on Ctrl-C runs for it."""
+
+    def __init__(self, seconds: float):
+        super().__init__(seconds)
+        self.seconds = seconds
+
+
 def caret_lines(source: str | None, line: int | None, col: int | None) -> str:
     """The source line ``line`` and a caret under column ``col`` (both 1-based)."""
     if source is None or line is None:

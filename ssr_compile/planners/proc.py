@@ -54,6 +54,39 @@ def _descendants(pid: int) -> list[int]:
     return out
 
 
+def _child_setup(tmpdir: str | None) -> None:
+    """In a forked child: SIGTERM and SIGHUP kill it (the parent's handlers, which turn them
+    into exceptions for its own cleanup, are not wanted here), and temporary files of the
+    work it does (and of the programs it starts) go to ``tmpdir``, which the parent removes
+    whatever happens to the child."""
+    for name in ("SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is not None:
+            signal.signal(signum, signal.SIG_DFL)
+    if tmpdir:
+        _use_tmpdir(tmpdir)
+
+
+def _use_tmpdir(tmpdir: str) -> None:
+    import tempfile
+
+    os.environ["TMPDIR"] = tmpdir
+    tempfile.tempdir = tmpdir
+
+
+def _private_tmpdir() -> str:
+    import tempfile
+
+    return tempfile.mkdtemp(prefix="ssr-work-")
+
+
+def _remove(tmpdir: str | None) -> None:
+    if tmpdir:
+        import shutil
+
+        shutil.rmtree(tmpdir, ignore_errors=True)
+
+
 def _kill_tree(pid: int) -> None:
     """Kill ``pid``'s process group and every process below it, with their groups."""
     below = _descendants(pid)
@@ -124,6 +157,14 @@ def run_forked(
             return OK, fn(*args)
         except Exception as e:  # noqa: BLE001 - reported as a planner error
             return FAILED, f"{type(e).__name__}: {e}"
+    tmpdir = _private_tmpdir()
+    try:
+        return _run_forked(fn, args, timeout, log_path, tmpdir)
+    finally:
+        _remove(tmpdir)
+
+
+def _run_forked(fn, args, timeout: float, log_path: str | None, tmpdir: str) -> tuple[str, Any]:
     read_fd, write_fd = os.pipe()
     pid = os.fork()
     if pid == 0:  # child: never return into the caller's code
@@ -131,6 +172,7 @@ def run_forked(
         try:
             os.close(read_fd)
             os.setsid()
+            _child_setup(tmpdir)
             out = os.open(log_path or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
             os.dup2(out, 1)
             os.dup2(out, 2)
@@ -236,6 +278,7 @@ class ForkedWorker:
                 os.close(req_w)
                 os.close(res_r)
                 os.setsid()
+                _child_setup(None)
                 self._serve(req_r, res_w)
             finally:
                 os._exit(0)
@@ -248,7 +291,8 @@ class ForkedWorker:
             message = _recv_blocking(req)
             if message is None:
                 return
-            args, log_path = message
+            args, log_path, tmpdir = message
+            _use_tmpdir(tmpdir)
             out = os.open(log_path or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
             os.dup2(out, 1)
             os.dup2(out, 2)
@@ -291,27 +335,35 @@ class ForkedWorker:
                 self._start()
                 self._calls = 0
             self._calls += 1
-            deadline = time.monotonic() + max(timeout, 0.0)
+            tmpdir = _private_tmpdir()
             try:
-                _send(self._req, (args, log_path))
-                buf = b""
-                size = None
-                while size is None or len(buf) < 8 + size:
-                    left = deadline - time.monotonic()
-                    if left <= 0:
-                        self._stop()
-                        return TIMED_OUT, None
-                    ready, _, _ = select.select([self._res], [], [], left)
-                    if not ready:
-                        continue
-                    chunk = os.read(self._res, 1 << 16)
-                    if not chunk:
-                        self._stop()
-                        return FAILED, "worker process died"
-                    buf += chunk
-                    if size is None and len(buf) >= 8:
-                        size = int.from_bytes(buf[:8], "little")
-                return pickle.loads(buf[8:])
-            except BaseException:
-                self._stop()
-                raise
+                return self._call(args, timeout, log_path, tmpdir)
+            finally:
+                _remove(tmpdir)
+
+    def _call(self, args: tuple, timeout: float, log_path: str | None, tmpdir: str):
+        """One request to the running worker (the lock is held by :meth:`call`)."""
+        deadline = time.monotonic() + max(timeout, 0.0)
+        try:
+            _send(self._req, (args, log_path, tmpdir))
+            buf = b""
+            size = None
+            while size is None or len(buf) < 8 + size:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    self._stop()
+                    return TIMED_OUT, None
+                ready, _, _ = select.select([self._res], [], [], left)
+                if not ready:
+                    continue
+                chunk = os.read(self._res, 1 << 16)
+                if not chunk:
+                    self._stop()
+                    return FAILED, "worker process died"
+                buf += chunk
+                if size is None and len(buf) >= 8:
+                    size = int.from_bytes(buf[:8], "little")
+            return pickle.loads(buf[8:])
+        except BaseException:
+            self._stop()
+            raise
