@@ -30,9 +30,16 @@ def to_int(value: float, scale: int) -> int:
 
 
 def cost_effects(effect) -> list[S.NumericEffect]:
+    """The action-cost effects ``(increase (total-cost) X)`` of an effect (top-level
+    conjuncts); a ``decrease`` of total-cost is not a cost."""
     out = []
     for e in S.conjuncts(effect):
-        if isinstance(e, S.NumericEffect) and e.fluent.name == TOTAL_COST.name:
+        if (
+            isinstance(e, S.NumericEffect)
+            and e.op == "increase"
+            and e.fluent.name == TOTAL_COST.name
+            and not e.fluent.args
+        ):
             out.append(e)
     return out
 

@@ -14,6 +14,7 @@ import itertools
 from dataclasses import replace
 
 from .. import syntax as S
+from ..check import atoms, variables
 from ..errors import UnsupportedError
 from .formulas import conj, map_atoms, substitute, variables_in
 
@@ -23,7 +24,7 @@ def dependencies(domain: S.Domain) -> dict[str, set[str]]:
     derived = {ax.name for ax in domain.axioms}
     graph: dict[str, set[str]] = {name: set() for name in derived}
     for ax in domain.axioms:
-        for atom in _atoms(ax.body):
+        for atom in atoms(ax.body):
             if atom.pred in derived:
                 graph[ax.name].add(atom.pred)
     return graph
@@ -55,7 +56,7 @@ def normalise_axiom_bodies(domain: S.Domain) -> S.Domain:
     axioms = []
     for ax in domain.axioms:
         head = {p.name for p in ax.parameters}
-        free = [v for v in _free(ax.body) if v not in head]
+        free = [v.name for v in variables(ax.body) if v.name not in head]
         body = ax.body
         if free:
             body = S.Exists(tuple(S.Typed(v) for v in dict.fromkeys(free)), body)
@@ -151,28 +152,6 @@ def _rename_bound(f, renaming: dict[str, S.Var]):
         return S.Imply(_rename_bound(f.left, renaming), _rename_bound(f.right, renaming))
     # Atoms, comparisons: free substitution reaches every variable (no binders inside).
     return substitute(f, renaming)
-
-
-def _atoms(f) -> list[S.Atom]:
-    out: list[S.Atom] = []
-    map_atoms(f, lambda a: out.append(a) or a)
-    return out
-
-
-def _free(f, bound: frozenset[str] = frozenset()) -> list[str]:
-    out: list[str] = []
-    if isinstance(f, S.Atom):
-        out.extend(a.name for a in f.args if isinstance(a, S.Var) and a.name not in bound)
-    elif isinstance(f, S.And | S.Or):
-        for a in f.args:
-            out.extend(_free(a, bound))
-    elif isinstance(f, S.Not):
-        out.extend(_free(f.arg, bound))
-    elif isinstance(f, S.Imply):
-        out.extend(_free(f.left, bound) + _free(f.right, bound))
-    elif isinstance(f, S.Exists | S.Forall):
-        out.extend(_free(f.body, bound | {p.name for p in f.params}))
-    return out
 
 
 __all__ = ["compile_away", "conj", "dependencies", "normalise_axiom_bodies", "recursive_predicates"]

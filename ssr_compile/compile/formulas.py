@@ -140,21 +140,6 @@ def has(f, *types) -> bool:
     return any(isinstance(x, types) for x in S.walk(f))
 
 
-def fresh_vars(params: tuple[S.Typed, ...], taken: set[str], tag: str) -> dict[str, S.Var]:
-    """Rename ``params`` apart from ``taken`` (adds the new names to ``taken``)."""
-    out = {}
-    for p in params:
-        base = p.name.lstrip("?")
-        name = f"?{base}"
-        n = 0
-        while name in taken:
-            n += 1
-            name = f"?{base}-{tag}{n}"
-        taken.add(name)
-        out[p.name] = S.Var(name)
-    return out
-
-
 def variables_in(f) -> set[str]:
     """All variable names occurring in a formula (bound or free)."""
     out: set[str] = set()

@@ -113,32 +113,3 @@ def describe_planners() -> list[dict]:
         for row in rows:
             out.append({"entry_point": ep.value, **row})
     return out
-
-
-def format_planners(rows: list[dict] | None = None) -> str:
-    """A plain-text table of :func:`describe_planners` for the CLI."""
-    rows = describe_planners() if rows is None else rows
-    features = list(Capabilities.__dataclass_fields__)
-    short = {
-        "negative_preconditions": "neg",
-        "conditional_effects": "cond",
-        "quantifiers": "quant",
-        "disjunction": "disj",
-    }
-    heads = ["planner", *(short.get(f, f) for f in features), "description"]
-    table = []
-    for r in rows:
-        caps = r.get("capabilities", {})
-        marks = ["yes" if caps.get(f) else "-" for f in features]
-        table.append(
-            [
-                r["name"],
-                *marks,
-                r.get("error") and f"unusable: {r['error']}" or r.get("description", ""),
-            ]
-        )
-    widths = [max(len(str(x)) for x in col) for col in zip(heads, *table)]
-    lines = [
-        "  ".join(str(x).ljust(w) for x, w in zip(row, widths)).rstrip() for row in [heads, *table]
-    ]
-    return "\n".join(lines)

@@ -9,6 +9,7 @@ function looked up in the initial state, or the plan's length when the problem h
 from __future__ import annotations
 
 from .. import syntax as S
+from ..compile.costs import cost_effects
 from ..errors import UnsupportedError
 from .base import SOLVED, UNSOLVABLE, GroundAction, over_bound
 
@@ -28,7 +29,7 @@ def plan_cost(domain: S.Domain, problem: S.Problem, actions: list[GroundAction])
         if action is None:
             raise UnsupportedError(f"plan uses unknown action {name!r}")
         binding = {p.name: a for p, a in zip(action.parameters, args)}
-        for e in _cost_effects(action.effect):
+        for e in cost_effects(action.effect):
             total += _value(e.value, binding, values)
     return total
 
@@ -37,7 +38,7 @@ def fractional_costs(domain: S.Domain, problem: S.Problem) -> list[str]:
     """Cost values that are not integers (Fast Downward accepts integer costs only)."""
     out = []
     for a in domain.actions:
-        for e in _cost_effects(a.effect):
+        for e in cost_effects(a.effect):
             if isinstance(e.value, S.Num) and not float(e.value.value).is_integer():
                 out.append(f"{a.name}: {e.value.value}")
     for v in problem.init:
@@ -45,19 +46,6 @@ def fractional_costs(domain: S.Domain, problem: S.Problem) -> list[str]:
             args = " ".join(a.name for a in v.fluent.args)
             out.append(f"({v.fluent.name}{' ' + args if args else ''}) = {v.value.value}")
     return out
-
-
-def _cost_effects(f) -> list[S.NumericEffect]:
-    if isinstance(f, S.And):
-        return [e for a in f.args for e in _cost_effects(a)]
-    if (
-        isinstance(f, S.NumericEffect)
-        and f.op == "increase"
-        and f.fluent.name == "total-cost"
-        and not f.fluent.args
-    ):
-        return [f]
-    return []
 
 
 def _value(e, binding: dict[str, str], values: dict) -> float:

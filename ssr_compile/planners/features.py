@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from .. import syntax as S
-from ..errors import UnsupportedError
 from .base import Capabilities
 
 _LABELS = {
@@ -106,17 +105,3 @@ def unsupported(
         if not ok:
             missing.append(_LABELS[feature])
     return missing
-
-
-def require(
-    capabilities: Capabilities,
-    domain: S.Domain,
-    problem: S.Problem,
-    planner: str,
-    *,
-    equality: bool = True,
-) -> None:
-    """Raise :class:`UnsupportedError` when the task uses a feature the backend lacks."""
-    missing = unsupported(capabilities, domain, problem, equality=equality)
-    if missing:
-        raise UnsupportedError(f"planner {planner!r} does not support " + ", ".join(missing))
