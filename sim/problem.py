@@ -1,9 +1,13 @@
-"""The initial PDDLStream problem of a kitchen task (``domains/pddl/kitchen``).
+"""The PDDLStream problem of a kitchen task (``domains/pddl/kitchen``) in any reached state.
 
-:func:`task_problem` builds the problem's syntax tree and the Python values of its objects
-from what the robot knows: the world's fixed geometry, its own configuration, the drawers'
-openings, the prior beliefs (uniform over the prior surfaces, with the prior's weights) and
-the goal — never from the latent poses of the objects.
+:func:`state_problem` builds the problem's syntax tree and the Python values of its objects
+from what the robot knows (a :class:`KnownState`): the world's fixed geometry, its own
+configuration (an arm that is not stowed included), the drawers' openings, what it holds and
+with which grasp, the stove, what is cooked, and its current pose beliefs (``localized``,
+``beliefon`` and ``possible`` read off each belief) -- never from the latent poses of the
+objects.  :func:`task_problem` is the initial problem: the prior beliefs (uniform over the
+prior surfaces, with the prior's weights).  Facts kept from the last plan (Algorithm 1's
+``ConstantFacts``) are added by the caller (``extra``).
 
 Conventions shared with ``streams/kitchen_module.py``:
 
@@ -12,10 +16,18 @@ Conventions shared with ``streams/kitchen_module.py``:
   push leave ``AtPoseB`` unchanged;
 * a drawer has two angles, ``<drawer>-closed`` (0) and ``<drawer>-open`` (``DRAWER_TRAVEL``),
   valued ``(drawer, q)``;
-* the arm's stowed configurations are ``aq-tuck`` (hand empty) and ``aq-carry`` (holding).
+* the arm's stowed configurations are ``aq-tuck`` (hand empty) and ``aq-carry`` (holding);
+  any other arm configuration is ``aq0`` with ``(reach bq0 aq0)``, so the arm motion stream can
+  bring it back to a stowed one;
+* :func:`to_world` / :func:`to_canonical` move a belief between the canonical frame and the
+  world frame at the drawers' current openings (visibility and real observations need the
+  world frame).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +43,9 @@ PARTICLES_PER_SURFACE = 100
 FIXED = ("counter", "stove")
 TALL = ("sugar_box", "cracker_box")  # taller than a drawer's clearance: counter only
 ABOVE = (("top_drawer", "bottom_drawer"),)  # an open top drawer hides the bottom one
+LOCALIZED_STD = 0.02  # a belief is localized: x, y spread at most 2 cm ...
+ON_PROB = 0.95  # ... with at least this mass on one surface
+POSSIBLE_PROB = 1e-3  # a surface with at least this mass may hold the object (sample-obs)
 
 
 def angle_name(drawer: str, is_open: bool) -> str:
@@ -68,14 +83,94 @@ def prior_belief(
     return PoseBelief(obj, surfaces, labels, np.array(poses), np.array(weights), hz)
 
 
+def is_localized(pb: PoseBelief, surface: str | None = None) -> bool:
+    """``pb`` puts at least :data:`ON_PROB` on one surface (``surface`` if given) with an x, y
+    spread of at most :data:`LOCALIZED_STD` there: precise enough to grasp from."""
+    probs = pb.surface_probs()
+    s = pb.most_likely_surface() if surface is None else surface
+    if probs.get(s, 0.0) < ON_PROB:
+        return False
+    return float(pb.std(s)[:2].max()) <= LOCALIZED_STD + 1e-12
+
+
+def drawer_shift(surface: str, drawers: dict[str, float]) -> float:
+    """World x minus canonical x of a point on ``surface`` (drawers slide along -x)."""
+    if surface not in DRAWERS:
+        return 0.0
+    return DRAWER_TRAVEL - float(drawers[surface])
+
+
+def _shifted(pb: PoseBelief, drawers: dict[str, float], sign: float) -> PoseBelief:
+    shifts = np.array([sign * drawer_shift(s.name, drawers) for s in pb.surfaces])
+    if not np.any(shifts):
+        return pb
+    surfaces = [
+        Surface(s.name, (s.center[0] + dx, s.center[1]), s.half_extents, s.z)
+        for s, dx in zip(pb.surfaces, shifts, strict=True)
+    ]
+    poses = np.array(pb.poses)
+    poses[:, 0] += shifts[pb.labels]
+    return PoseBelief(pb.obj, surfaces, pb.labels, poses, pb.weights, pb.z_offset)
+
+
+def to_world(pb: PoseBelief, drawers: dict[str, float]) -> PoseBelief:
+    """A canonical-frame belief in the world frame at the drawers' openings ``drawers``:
+    particles in a drawer move with it."""
+    return _shifted(pb, drawers, 1.0)
+
+
+def to_canonical(pb: PoseBelief, drawers: dict[str, float]) -> PoseBelief:
+    """Inverse of :func:`to_world`."""
+    return _shifted(pb, drawers, -1.0)
+
+
+@dataclass
+class KnownState:
+    """What the robot knows for certain, and its beliefs (the input of :func:`state_problem`).
+
+    ``held``: ``(object, grasp value)`` or ``None``; ``beliefs``: canonical-frame pose beliefs
+    of the objects that are not held; ``cooked``: objects known to be cooked."""
+
+    base: tuple[float, ...]
+    arm: tuple[float, ...]
+    drawers: dict[str, float]
+    beliefs: dict[str, PoseBelief]
+    held: tuple[str, Any] | None = None
+    stove_on: bool = False
+    cooked: set[str] = field(default_factory=set)
+    beliefon: dict[str, str] = field(default_factory=dict)  # prior: certainly on that surface
+
+
 def _atom(pred: str, *args: str) -> S.Atom:
     return S.Atom(pred, tuple(S.Const(a) for a in args))
 
 
-def task_problem(task: Task, *, seed: int | None = None) -> tuple[S.Problem, dict]:
-    """The initial problem of ``task`` and the values of its objects (see the module doc)."""
-    w = task.world
-    rng = np.random.default_rng(task.seed if seed is None else seed)
+def _same(a, b, tol: float = 1e-6) -> bool:
+    return len(a) == len(b) and float(np.max(np.abs(np.subtract(a, b)))) < tol
+
+
+def goal_formula(goal) -> S.Formula:
+    """A task's goal (``sim.tasks``) as a PDDL formula of the kitchen domain."""
+    out: list = []
+    for head, *args in goal:
+        if head == "On":
+            out.append(_atom("on", *args))
+        elif head == "Closed":
+            out.append(_atom("atangle", args[0], angle_name(args[0], False)))
+        elif head == "Cooked":
+            out.append(_atom("cooked", args[0]))
+        elif head == "StoveOff":
+            out.append(S.Not(_atom("stoveon")))
+        else:
+            raise ValueError(f"unknown goal fact {head!r}")
+    return out[0] if len(out) == 1 else S.And(tuple(out))
+
+
+def state_problem(
+    task: Task, known: KnownState, *, name: str | None = None, extra: tuple = ()
+) -> tuple[S.Problem, dict]:
+    """The problem of ``task`` from the reached state ``known`` and the values of its objects
+    (see the module doc); ``extra``: facts kept from the last plan."""
     values: dict = {}
     init: list = []
     objects: list[str] = []
@@ -97,7 +192,7 @@ def task_problem(task: Task, *, seed: int | None = None) -> tuple[S.Problem, dic
         opened = obj(angle_name(d, True), (d, DRAWER_TRAVEL))
         init += [_atom("angle", d, closed), _atom("angle", d, opened)]
         init += [_atom("closed", d, closed), _atom("open", d, opened)]
-        now = opened if w.drawer_q[d] > DRAWER_TRAVEL / 2 else closed
+        now = opened if known.drawers[d] > DRAWER_TRAVEL / 2 else closed
         init.append(_atom("atangle", d, now))
     for d1, d2 in ABOVE:
         init.append(_atom("above", d1, d2))
@@ -107,18 +202,23 @@ def task_problem(task: Task, *, seed: int | None = None) -> tuple[S.Problem, dic
     carry = obj("aq-carry", tuple(ARM_CARRY))
     init += [_atom("conf", "arm", tuck), _atom("stow", tuck), _atom("stowempty", tuck)]
     init += [_atom("conf", "arm", carry), _atom("stow", carry), _atom("stowheld", carry)]
-    base = obj("bq0", tuple(float(v) for v in w.robot.get_base()))
+    base = obj("bq0", tuple(float(v) for v in known.base))
     init += [_atom("conf", "base", base), _atom("atconf", "base", base)]
-    arm = tuple(float(v) for v in w.robot.get_arm())
-    if np.max(np.abs(np.subtract(arm, ARM_TUCK))) < 1e-6:
+    arm = tuple(float(v) for v in known.arm)
+    if _same(arm, ARM_TUCK):
         init.append(_atom("atconf", "arm", tuck))
+    elif _same(arm, ARM_CARRY):
+        init.append(_atom("atconf", "arm", carry))
     else:
         q0 = obj("aq0", arm)
-        init += [_atom("conf", "arm", q0), _atom("atconf", "arm", q0)]
-    init.append(_atom("handempty"))
+        init += [_atom("conf", "arm", q0), _atom("atconf", "arm", q0), _atom("reach", base, q0)]
+    if known.held is None:
+        init.append(_atom("handempty"))
+    if known.stove_on:
+        init.append(_atom("stoveon"))
 
-    # the objects and their prior beliefs
-    for o, entries in sorted(task.prior.items()):
+    # the objects and their beliefs
+    for o in sorted(set(task.prior) | set(known.beliefs)):
         obj(o)
         init.append(_atom("graspable", o))
         if o in TALL:
@@ -126,29 +226,58 @@ def task_problem(task: Task, *, seed: int | None = None) -> tuple[S.Problem, dic
         for s in surfaces:
             if o not in TALL or s == "counter":
                 init.append(_atom("placeable", o, s))
-        pb = obj(belief_name(o), prior_belief(w, o, entries, rng))
+        if o in known.cooked:
+            init.append(_atom("cooked", o))
+        if known.held is not None and known.held[0] == o:
+            g = obj(f"g-{o}", known.held[1])
+            init += [_atom("grasp", o, g), _atom("atgrasp", o, g)]
+            continue
+        belief = known.beliefs[o]
+        pb = obj(belief_name(o), belief)
         init += [_atom("poseb", o, pb), _atom("atposeb", o, pb)]
-        init += [_atom("possible", o, pb, s) for s, _ in entries]
-        if len(entries) == 1:  # certainly on that surface, though not localized on it
-            init.append(_atom("beliefon", o, pb, entries[0][0]))
+        probs = belief.surface_probs()
+        if is_localized(belief):
+            s = belief.most_likely_surface()
+            init += [_atom("localized", o, pb), _atom("beliefon", o, pb, s)]
+            continue
+        init += [
+            _atom("possible", o, pb, s)
+            for s in (x.name for x in belief.surfaces)
+            if probs.get(s, 0.0) >= POSSIBLE_PROB
+        ]
+        sure = known.beliefon.get(o)
+        if sure is None:
+            sure = next((s for s, p in probs.items() if p >= ON_PROB), None)
+        if sure is not None:  # certainly on that surface, though not localized on it
+            init.append(_atom("beliefon", o, pb, sure))
+    init.extend(f for f in extra if f not in init)
     init.append(S.InitValue(S.FuncTerm("total-cost"), S.Num(0)))
 
-    goal = []
-    for head, *args in task.goal:
-        if head == "On":
-            goal.append(_atom("on", *args))
-        elif head == "Closed":
-            goal.append(_atom("atangle", args[0], angle_name(args[0], False)))
-        elif head == "Cooked":
-            goal.append(_atom("cooked", args[0]))
-        else:
-            raise ValueError(f"unknown goal fact {head!r}")
     problem = S.Problem(
-        f"kitchen-{task.name}-{task.seed}",
+        name or f"kitchen-{task.name}-{task.seed}",
         DOMAIN,
         objects=tuple(S.Typed(o) for o in objects),
         init=tuple(init),
-        goal=goal[0] if len(goal) == 1 else S.And(tuple(goal)),
+        goal=goal_formula(task.goal),
         metric=S.Metric("minimize", S.FuncTerm("total-cost")),
     )
     return problem, values
+
+
+def initial_state(task: Task, *, seed: int | None = None, world: World | None = None) -> KnownState:
+    """What the robot knows before acting: its configuration, the drawers and the prior."""
+    w = task.world if world is None else world
+    rng = np.random.default_rng(task.seed if seed is None else seed)
+    beliefs = {o: prior_belief(w, o, entries, rng) for o, entries in sorted(task.prior.items())}
+    return KnownState(
+        base=tuple(float(v) for v in w.robot.get_base()),
+        arm=tuple(float(v) for v in w.robot.get_arm()),
+        drawers=dict(w.drawer_q),
+        beliefs=beliefs,
+        beliefon={o: e[0][0] for o, e in task.prior.items() if len(e) == 1},
+    )
+
+
+def task_problem(task: Task, *, seed: int | None = None) -> tuple[S.Problem, dict]:
+    """The initial problem of ``task`` and the values of its objects (see the module doc)."""
+    return state_problem(task, initial_state(task, seed=seed))

@@ -3,7 +3,7 @@
 A :class:`Task` gives the world in its latent initial state, the prior belief as plain data
 (``object -> [(surface, weight), ...]``: uniform over those surfaces), the latent state
 (``world.true_state()`` at the start, for evaluation only) and the goal as PDDL-like tuples:
-``("On", obj, surface)``, ``("Closed", drawer)``, ``("Cooked", obj)``.
+``("On", obj, surface)``, ``("Closed", drawer)``, ``("Cooked", obj)``, ``("StoveOff",)``.
 
 * Inspect: goal block in the bottom drawer and the bottom drawer closed; prior uniform over
   both drawers; the block is in the bottom drawer (drawers closed).
@@ -11,9 +11,10 @@ A :class:`Task` gives the world in its latent initial state, the prior belief as
   counter, sugar box uniform over the top drawer; the block is on the counter, the sugar box in
   the (open) top drawer — it is too tall for the drawer to close.
 * Swap: goal and prior as Inspect; the block is in the top drawer (drawers closed).
-* Cook: goal block cooked; prior block uniform over the counter (and so are the boxes); the
-  cracker box and the sugar box are on the counter, one of them hiding the block from the
-  camera.
+* Cook: goal block cooked *and the stove off* (the appendix's trace turns the stove on, which
+  cooks the block, then off again); prior block uniform over the counter (and so are the
+  boxes); the cracker box and the sugar box are on the counter, one of them hiding the block
+  from the camera.
 """
 
 from __future__ import annotations
@@ -70,6 +71,9 @@ def goal_holds(goal: Goal, state: dict) -> bool:
                 return False
         elif head == "Cooked":
             if args[0] not in state["cooked"]:
+                return False
+        elif head == "StoveOff":
+            if state["stove_on"]:
                 return False
         else:
             raise ValueError(f"unknown goal fact {fact!r}")
@@ -149,7 +153,7 @@ def make_task(name: str, seed: int, *, gui: bool = False) -> Task:
         goal = (("On", "block", "top_drawer"), ("Closed", "top_drawer"))
     else:  # cook
         prior = {o: [("counter", 1.0)] for o in ("block", "cracker_box", "sugar_box")}
-        goal = (("Cooked", "block"),)
+        goal = (("Cooked", "block"), ("StoveOff",))
         for _ in range(100):
             for o in ("block", "cracker_box", "sugar_box"):
                 world.remove_object(o)

@@ -24,7 +24,7 @@ from contextlib import contextmanager
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
-from ssr_compile.sim.problem import canonical_surface
+from ssr_compile.sim.problem import LOCALIZED_STD, ON_PROB, canonical_surface, is_localized
 from ssr_compile.sim.robot import ARM_TUCK
 from ssr_compile.sim.samplers import Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
@@ -45,16 +45,6 @@ EPS = 0.1  # occlusion tolerance of an observation (paper §V-B)
 DELTA = 0.1  # radius of an observation's region X_i, metres
 C_DETECT = 1.0  # c: one detection
 C_RECOVER = 1.0  # c': a failed detection, then look again
-LOCALIZED_STD = 0.02  # a belief is localized: x, y spread at most 2 cm ...
-ON_PROB = 0.95  # ... with at least this mass on one surface
-
-
-def is_localized(pb: PoseBelief, surface: str | None = None) -> bool:
-    probs = pb.surface_probs()
-    s = pb.most_likely_surface() if surface is None else surface
-    if probs.get(s, 0.0) < ON_PROB:
-        return False
-    return float(pb.std(s)[:2].max()) <= LOCALIZED_STD + 1e-12
 
 
 class KitchenModule:

@@ -102,7 +102,7 @@ def test_cook_detects_picks_places_and_presses(files):
     # evaluated test-vis (Focused) to report the box in the way.
     plan = optimistic_plan(files, "cook", 5)
     sk = skeleton(plan)
-    assert [n for n, _ in sk] == ["detect", "pick", "place", "press-on"]
+    assert [n for n, _ in sk] == ["detect", "pick", "place", "press-on", "press-off"]
     assert [a for _, a in sk[:3]] == ["block"] * 3
     place = next(a for n, a in plan if n == "place")
     assert place[1] != "pb-block"  # a new, known pose: a stove placement (goal: cooked)

@@ -56,5 +56,5 @@
     (possible sugar_box pb-sugar_box counter)
     (beliefon sugar_box pb-sugar_box counter)
     (= (total-cost) 0))
-  (:goal (cooked block))
+  (:goal (and (cooked block) (not (stoveon))))
   (:metric minimize (total-cost)))
