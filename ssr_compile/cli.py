@@ -505,6 +505,7 @@ def _load_command_modules() -> None:
         "ssr_compile.cli_solve",
         "ssr_compile.cli_sim",
         "ssr_compile.cli_run",
+        "ssr_compile.cli_experiment",
     ):
         try:
             importlib.import_module(module)
