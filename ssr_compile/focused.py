@@ -18,6 +18,7 @@ optimistic (marked), and the next replanning call evaluates them if they are sti
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 import sys
 import time
@@ -280,6 +281,7 @@ def solve(
     progress: Callable[[str], None] | None = None,
     unit_cost: bool = False,
     eager_cost: float = EAGER_COST,
+    share: bool = False,
 ) -> Solution:
     """Solve a PDDLStream problem with the Focused algorithm (see the module docstring).
 
@@ -288,6 +290,10 @@ def solve(
     Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
     soon as their arguments are real (before planning), so the planner sees their real
     values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
+    ``share``: instances with optimistic inputs share their optimistic outputs (see
+    :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
+    but more real values later (each consumer is evaluated for every value bound to a shared
+    object); off by default, as it is not faster on the shipped examples yet.
     Returns a :class:`Solution` with status "solved", "unsolvable" or "timeout".
     """
     from .planners import get_planner
@@ -351,6 +357,7 @@ def solve(
                 plan_tail=plan_tail,
                 is_constant=is_constant,
                 unit_cost=unit_cost,
+                share=share,
             )
 
         if eager and len(ev.results) != eager_seen:
@@ -383,8 +390,10 @@ def solve(
                 best_failure = result.message
             if level >= max_level:
                 why = "under the cost bound " if bound is not None else ""
+                took = time.monotonic() - start  # a level cut-off proves nothing: not "unsolvable"
                 return finish(
-                    "unsolvable", message=f"no plan {why}up to level {max_level} ({best_failure})"
+                    "unsolvable",
+                    message=f"no plan found {why}up to level {max_level} in {took:.1f} s ({best_failure})",
                 )
             level += 1
             ev.tried.clear()  # failed instances may be retried at the higher level
@@ -410,7 +419,10 @@ def solve(
         producers = _producers(now, compiled.instantiation)
         ordered = order_stream_plan(now, module.info_for, producers)
         say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
-        binding: dict[str, Any] = {}
+        binding: dict[str, Any] = {}  # optimistic object -> its real name
+        values_of: dict[str, list[str]] = {}  # shared optimistic object -> real names
+        shared = compiled.instantiation.shared
+        facts = _RealFacts(problem, ev)
         failed: set[str] = set()
         for res in ordered:
             if time.monotonic() >= deadline:
@@ -421,11 +433,56 @@ def solve(
             if any(x in failed for x in res.instance.inputs):
                 failed.update(res.outputs)
                 continue
-            ok = ev.evaluate(res, binding)
-            ev.record(ok, res.instance.stream)
-            if not ok:
+            if not shared or not any(x in shared for x in (*res.instance.inputs, *res.outputs)):
+                ok = ev.evaluate(res, binding)
+                ev.record(ok, res.instance.stream)
+                if not ok:
+                    failed.update(res.outputs)
+                    say(f"  {res.instance} failed")
+                continue
+            # A shared object stands for every real value bound to it: evaluate the instance
+            # for each combination whose domain facts really hold.
+            inputs = res.instance.inputs
+            choices = [values_of.get(x, []) if x in shared else [binding.get(x, x)] for x in inputs]
+            any_ok = False
+            for combo in itertools.product(*choices):
+                local = dict(zip(inputs, combo))
+                if not all(facts.holds(f, local, binding) for f in res.domain):
+                    continue
+                ok = ev.evaluate(res, local)
+                ev.record(ok, res.instance.stream)
+                if not ok:
+                    say(f"  {res.instance.stream}({', '.join(combo)}) failed")
+                    continue
+                any_ok = True
+                for o in res.outputs:
+                    if o in shared:
+                        if local[o] not in values_of.setdefault(o, []):
+                            values_of[o].append(local[o])
+                    else:
+                        binding[o] = local[o]
+            if not any_ok:
                 failed.update(res.outputs)
-                say(f"  {res.instance} failed")
+
+
+class _RealFacts:
+    """The real facts (the problem's and the evaluated results'), kept up to date."""
+
+    def __init__(self, problem: S.Problem, ev: _Evaluation):
+        self.ev = ev
+        self.facts = {f for f in problem.init if isinstance(f, S.Atom)}
+        self.seen = 0
+
+    def holds(self, fact: S.Atom, local: dict[str, str], binding: dict[str, str]) -> bool:
+        results = self.ev.results
+        for r in results[self.seen :]:
+            self.facts.update(r.certified)
+        self.seen = len(results)
+        ground = S.Atom(
+            fact.pred,
+            tuple(S.Const(local.get(t.name, binding.get(t.name, t.name))) for t in fact.args),
+        )
+        return ground in self.facts
 
 
 def _evaluate_eagerly(
@@ -460,7 +517,7 @@ def _split_deferred(needed, pre, plan, inst, module, defer: bool):
                 in first_costs
             )
         )
-        if uses_now or not deferrable:
+        if uses_now or not deferrable or any(o in inst.shared for o in r.outputs):
             must.add(id(r))
     # Everything a must-result needs (its producers) must be evaluated too.
     producers = _producers(needed, inst)
@@ -482,9 +539,9 @@ def _producers(results: list[Result], inst) -> dict[int, list[int]]:
     for r in results:
         deps = []
         for x in r.instance.inputs:
-            p = inst.objects.get(x)
-            if p is not None and id(p) in ids:
-                deps.append(id(p))
+            for p in inst.shared.get(x) or [inst.objects.get(x)]:
+                if p is not None and id(p) in ids:
+                    deps.append(id(p))
         for fact in r.domain:
             for p in inst.facts.get(fact, ())[:1]:
                 if id(p) in ids:
@@ -515,7 +572,7 @@ def print_solution(solution: Solution, out=sys.stdout) -> None:
             vals = ", ".join(
                 f"{a}={_short(v)}"
                 for a, v in zip(step.args, step.values)
-                if v is not None and v != a
+                if v is not None and not (isinstance(v, str) and v == a)  # any type (numpy)
             )
             mark = f"  [deferred: {' '.join(step.deferred)}]" if step.deferred else ""
             print(f"  {i:2d}. {step}{mark}", file=out)

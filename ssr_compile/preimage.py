@@ -269,10 +269,21 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
     needed: list[Result] = []
     seen: set[int] = set()
 
+    shared = inst.shared
+    waiting: list[Result] = []  # results with a shared input, placed after its producers
+
     def need(res: Result) -> None:
         if id(res) in seen or not res.optimistic:
             return
         seen.add(id(res))
+        if any(x in shared for x in res.instance.inputs):
+            # A shared input's values come from the producers the plan needs elsewhere.
+            for fact in res.domain:
+                if not any(t.name in shared for t in fact.args):
+                    for producer in inst.facts.get(fact, ())[:1]:
+                        need(producer)
+            waiting.append(res)
+            return
         for obj in res.instance.inputs:
             if obj in inst.objects:
                 need(inst.objects[obj])
@@ -292,6 +303,14 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
         res = inst.functions.get(term)
         if res is not None:
             need(res)
+    # Shared inputs: at least one producer of each (the first), then the waiting results.
+    while waiting:
+        res = waiting.pop(0)
+        for obj in res.instance.inputs:
+            producers = shared.get(obj)
+            if producers and not any(id(p) in seen for p in producers):
+                need(producers[0])
+        needed.append(res)
     return needed
 
 

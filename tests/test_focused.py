@@ -203,3 +203,20 @@ def test_solution_is_unsolvable_when_no_goal_pose_is_free():
     _, sol = run(module=module, max_level=4, time_limit=20)
     assert sol.status == "unsolvable"
     assert math.isfinite(sol.stats.total_time)
+
+
+@pytest.mark.parametrize("problem", ["problem.pddl", "problem-blocked.pddl"])
+def test_shared_optimistic_outputs_solve_and_the_plan_simulates(problem):
+    module, sol = run(problem, share=True)
+    assert sol.status == "solved", sol.message
+    values, b_pose = _values_with_b(module, problem)
+    _simulate(sol.plan, values, {"a": values["pa"], "b": values[b_pose]})
+    assert all(len(z) == 4 for z in sol.stats.sizes) and len(sol.stats.sizes) == sol.stats.iterations
+
+
+def test_cheap_functions_are_evaluated_eagerly_and_the_plan_is_as_cheap():
+    _, lazy = run("problem.pddl", eager_cost=-1)
+    _, eager = run("problem.pddl")
+    assert lazy.status == eager.status == "solved"
+    assert eager.cost <= lazy.cost + 1e-9
+    assert eager.stats.planner_calls <= lazy.stats.planner_calls

@@ -66,6 +66,8 @@ class Instantiation:
     functions: dict[S.FuncTerm, Result] = field(default_factory=dict)
     level: int = 0
     saturated: bool = True  # False when the level limit cut instantiation short
+    # shared optimistic object -> every result that outputs it (``share=True``)
+    shared: dict[str, list[Result]] = field(default_factory=dict)
 
     def optimistic_objects(self) -> set[str]:
         return set(self.objects)
@@ -87,8 +89,15 @@ def instantiate(
     function_values: Mapping[str, float] | None = None,
     real_function_values: Mapping[S.FuncTerm, float] | None = None,
     exhausted: Iterable[Instance] = (),
+    share: bool = False,
 ) -> Instantiation:
     """Optimistically instantiate ``streams`` over ``problem`` up to ``level``.
+
+    With ``share``, instances with an optimistic input do not get fresh outputs: all of them
+    share one optimistic object per stream output (PDDLStream's shared optimistic values), so
+    the optimistic problem grows with the real objects, not with chains of optimistic ones;
+    instances over real inputs keep their own outputs.  ``shared`` lists the producers of each
+    shared object (the solver evaluates consumers for every real value bound to it).
 
     ``evaluated`` are real results (their facts join the initial state at level 0);
     ``disabled`` instances are not instantiated optimistically (they failed at this level);
@@ -135,6 +144,7 @@ def instantiate(
     new_facts: list[S.Atom] = []
     counter = itertools.count(1)
     seen: set[Instance] = set()
+    shared_names: dict[tuple[str, str], str] = {}
     for res in evaluated:
         out.results.append(res)
 
@@ -169,21 +179,28 @@ def instantiate(
         for stream, inst, binding, dom_facts, inst_level in made:
             outputs = []
             full = dict(binding)
+            sharing = share and any(x in out.objects for x in inst.inputs)
             for o in stream.outputs:
-                name = optimistic_name(o.name, next(counter))
-                while name in taken:
+                name = shared_names.get((stream.name, o.name)) if sharing else None
+                if name is None:
                     name = optimistic_name(o.name, next(counter))
-                taken.add(name)
+                    while name in taken:
+                        name = optimistic_name(o.name, next(counter))
+                    taken.add(name)
+                    new_objects.append(S.Typed(name, o.type))
+                    if sharing:
+                        shared_names[(stream.name, o.name)] = name
                 full[o.name] = name
                 outputs.append(name)
-                new_objects.append(S.Typed(name, o.type))
             certified = tuple(
                 _ground(a, full) for a in S.conjuncts(stream.certified) if isinstance(a, S.Atom)
             )
             res = Result(inst, tuple(outputs), certified, tuple(dom_facts), inst_level)
             out.results.append(res)
             for name in outputs:
-                out.objects[name] = res
+                out.objects.setdefault(name, res)
+                if sharing:
+                    out.shared.setdefault(name, []).append(res)
             for atom in certified:
                 if atom not in levels or levels[atom] > 0:
                     out.facts.setdefault(atom, []).append(res)

@@ -97,6 +97,7 @@ def compile_problem(
     is_constant: Callable[[str], bool] | None = None,
     scale: int | None = None,
     unit_cost: bool = False,
+    share: bool = False,
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
     inst = None
@@ -111,6 +112,7 @@ def compile_problem(
             exhausted=exhausted,
             function_values=function_values,
             real_function_values=real_function_values,
+            share=share,
         )
         problem = inst.problem
         domain = declare_stream_predicates(domain, streams)

@@ -1,0 +1,133 @@
+"""Focused solver scaling: generated tamp2d problems with 1..8 blocks to move into one goal
+region, printing solve time, stream calls, planner calls, plan length and cost, and the
+largest compiled problem per size (issue 13: the growth must stay polynomial for problems whose
+plans grow linearly).  Figures, no assertions (DESIGN §2).
+
+The problems use ``domains/pddl/tamp2d`` (domain and streams, ``ssr_compile.streams.tamp2d``)
+with generated values: N blocks of width 0.5 in a row on the table, a goal region of 0.8 per
+block (placements there may collide: test-cfree fails and the solver samples again), and with
+``--blockers`` one more block standing in the middle of the goal region, to move aside.
+
+Run: python bench/scaling_bench.py               # sizes 1..8, one run each (about a minute)
+     python bench/scaling_bench.py --full        # 3 runs per size (medians), longer limits
+     python bench/scaling_bench.py --sizes 1 2 3 --runs 3 --planner fd:opt
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ssr_compile.focused import solve  # noqa: E402
+from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
+from ssr_compile.stream import load_streams_module  # noqa: E402
+
+FOLDER = ROOT / "domains/pddl/tamp2d"
+WIDTH, HEIGHT = 0.5, 0.8
+
+
+def generate(n: int, blockers: bool = False):
+    """Problem text and VALUES for ``n`` blocks (plus a blocker in the goal region)."""
+    import ssr_compile.streams.tamp2d as T
+
+    goal_lo = 3.0
+    goal_hi = goal_lo + 0.8 * n + (0.8 if blockers else 0.0)
+    values = {
+        "q0": T.Conf(-5.0, 3.0),
+        "rtable": T.Region(-5.5, 2.5),
+        "rgoal": T.Region(goal_lo, round(goal_hi, 3)),
+    }
+    objects = ["q0", "rtable", "rgoal"]
+    init = ["(Region rtable)", "(Region rgoal)", "(Conf q0)", "(AtConf q0)", "(HandEmpty)"]
+    goal = []
+    blocks = [(f"b{i}", -5.0 + 0.9 * i) for i in range(n)]
+    if blockers:
+        blocks.append(("c0", round((goal_lo + goal_hi) / 2, 3)))
+    for i, (b, x) in enumerate(blocks):
+        p = f"p{i}"
+        region = "rgoal" if b.startswith("c") else "rtable"
+        values[b] = T.Block(b, WIDTH, HEIGHT)
+        values[p] = T.Pose(round(x, 3))
+        objects += [b, p]
+        init += [f"(Block {b})", f"(Pose {b} {p})", f"(AtPose {b} {p})", f"(Contained {b} {p} {region})"]
+        if b.startswith("b"):
+            goal.append(f"(In {b} rgoal)")
+    text = (
+        f"(define (problem tamp2d-scaling-{n})\n  (:domain tamp2d)\n"
+        f"  (:objects {' '.join(objects)})\n"
+        f"  (:init {' '.join(init)} (= (total-cost) 0))\n"
+        f"  (:goal (and {' '.join(goal)}))\n  (:metric minimize (total-cost)))\n"
+    )
+    return text, values
+
+
+def run_once(n: int, args) -> tuple:
+    text, values = generate(n, args.blockers)
+    d = parse_domain((FOLDER / "domain.pddl").read_text())
+    s = parse_stream_file((FOLDER / "stream.pddl").read_text())
+    p = parse_problem(text)
+    module = load_streams_module("ssr_compile.streams.tamp2d", search=[ROOT])
+    module.module.seed(args.seed)
+    module = replace(module, values=values)
+    start = time.perf_counter()
+    sol = solve(
+        d,
+        s,
+        p,
+        module,
+        planner=args.planner,
+        time_limit=args.time_limit,
+        initial_level=args.level,
+        max_level=args.max_level,
+    )
+    elapsed = time.perf_counter() - start
+    calls = sum(st.calls for st in sol.stats.streams.values())
+    sizes = getattr(sol.stats, "sizes", None) or [(0, 0)]
+    big = max(sizes, key=lambda z: (z[1], z[0]))
+    length = len(sol.plan) if sol.plan else 0
+    cost = sol.cost if sol.cost is not None else float("nan")
+    return sol.status, elapsed, calls, sol.stats.planner_calls, length, cost, big[0], big[1]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=None, help="numbers of blocks")
+    ap.add_argument("--runs", type=int, default=None, help="runs per size (medians)")
+    ap.add_argument("--time-limit", type=float, default=None, help="per solve, seconds")
+    ap.add_argument("--full", action="store_true", help="3 runs per size, 120 s limits")
+    ap.add_argument("--blockers", action="store_true", help="a block to move out of the goal")
+    ap.add_argument("--planner", default="fd")
+    ap.add_argument("--level", type=int, default=3)
+    ap.add_argument("--max-level", type=int, default=8)
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    args.sizes = args.sizes or list(range(1, 9))
+    args.runs = args.runs or (3 if args.full else 1)
+    args.time_limit = args.time_limit or (120.0 if args.full else 15.0)
+    head = (
+        f"{'blocks':>6s} {'status':8s} {'time s':>8s} {'streams':>8s} {'planner':>8s} "
+        f"{'length':>6s} {'cost':>8s} {'objects':>8s} {'facts':>7s}"
+    )
+    print(f"planner {args.planner}, {args.runs} run(s) per size, medians" + (", with a blocker" if args.blockers else ""))
+    print(head)
+    print("-" * len(head))
+    for n in args.sizes:
+        rows = [run_once(n, args) for _ in range(args.runs)]
+        med = [statistics.median(r[i] for r in rows) for i in range(1, 8)]
+        status = "/".join(sorted({r[0] for r in rows}))
+        print(
+            f"{n:6d} {status:8s} {med[0]:8.2f} {med[1]:8.0f} {med[2]:8.0f} {med[3]:6.0f} "
+            f"{med[4]:8.2f} {med[5]:8.0f} {med[6]:7.0f}",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()
