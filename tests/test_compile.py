@@ -408,10 +408,16 @@ def test_derived_real_problem_solved_with_axioms_kept_and_compiled_away():
         plan = c.map_plan(result.actions)
         check_valid(d, p, plan)
         assert [x[0] for n, x in plan if n == "pick"] == ["b", "a"]
-    # pyperplan (no quantifiers, no disjunction) would need the DNF of a negated existential
-    # over every pair of objects: refused clearly, naming the action.
-    with pytest.raises(UnsupportedError, match="'place'"):
-        compile_problem(d, None, p, caps=get_planner("pyperplan").capabilities)
+    # pyperplan (no quantifiers, no disjunction, no axioms): the task is ground first, so
+    # the negated existential is a conjunction over the objects that really collide.
+    pyper = get_planner("pyperplan")
+    c = compile_problem(d, None, p, caps=pyper.capabilities)
+    assert all(not a.parameters for a in c.domain.actions) and not c.domain.axioms
+    result = pyper.solve(c.domain, c.problem, time_limit=20)
+    assert result.status == "solved", result.message
+    plan = c.map_plan(result.actions)
+    check_valid(d, p, plan)
+    assert [x[0] for n, x in plan if n == "pick"] == ["b", "a"]
 
 
 RECURSIVE = """
@@ -509,9 +515,13 @@ SWITCH_PROBLEM = """
 
 
 def test_lowering_for_pyperplan_negation_equality_disjunction():
+    # the lifted lowering (a STRIPS backend that does not ask for a ground task)
+    import dataclasses
+
     d, p = parse_domain(SWITCH_DOMAIN), parse_problem(SWITCH_PROBLEM)
     planner = get_planner("pyperplan")
-    c = compile_problem(d, None, p, caps=planner.capabilities)
+    lifted = dataclasses.replace(planner.capabilities, ground=False)
+    c = compile_problem(d, None, p, caps=lifted)
     for a in c.domain.actions:
         for part in S.conjuncts(a.precondition):
             assert isinstance(part, S.Atom) and part.pred != "=", (a.name, part)

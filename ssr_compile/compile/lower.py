@@ -27,6 +27,7 @@ from ..planners.rename import Renaming, rename_task
 from .costs import compile_costs
 from .derived import compile_away, normalise_axiom_bodies
 from .formulas import TooLarge, conj, dnf, has, map_atoms, nnf, substitute
+from .ground import Grounded, ground
 
 Plan = list[tuple[str, tuple[str, ...]]]
 MAX_EXPANSION = 200_000
@@ -45,6 +46,8 @@ class Lowered:
     templates: dict[str, tuple[str, tuple[int | str, ...]]]
     # names changed so that every reader accepts them (see :func:`lower`)
     renaming: Renaming | None = None
+    # ground action name -> (lifted action, arguments), when the task was grounded
+    grounded: Grounded | None = None
 
     def map_plan(self, plan: Plan) -> Plan:
         out: Plan = []
@@ -60,6 +63,8 @@ class Lowered:
                 out.append(
                     (original, tuple(args[t] if isinstance(t, int) else t for t in template))
                 )
+        if self.grounded is not None:
+            out = self.grounded.map_plan(out)
         return out
 
 
@@ -81,6 +86,10 @@ def lower(
             col=a.span.col if a.span else None,
         )
     domain = normalise_axiom_bodies(domain)
+    grounded = None
+    if getattr(caps, "ground", False):
+        grounded = ground(domain, problem, conditional_effects=caps.conditional_effects)
+        domain, problem = grounded.domain, grounded.problem
     if not caps.axioms:
         domain, problem = compile_away(domain, problem)
     if not caps.quantifiers:
@@ -111,7 +120,7 @@ def lower(
     # predicate may not share a name) and wants plain identifiers: rename what offends it,
     # and map plans back.
     domain, problem, renaming = rename_task(domain, problem)
-    return Lowered(domain, problem, scale, templates, renaming or None)
+    return Lowered(domain, problem, scale, templates, renaming or None, grounded)
 
 
 def requirements_of(domain: S.Domain, problem: S.Problem) -> tuple[str, ...]:

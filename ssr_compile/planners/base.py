@@ -34,6 +34,9 @@ class Capabilities:
     quantifiers: bool
     conditional_effects: bool
     optimal: bool = False
+    # Give the backend a ground task (compile/ground.py): for planners that cannot take
+    # quantifiers and axioms, and for readers that enumerate every grounding themselves.
+    ground: bool = False
 
     def as_dict(self) -> dict[str, bool]:
         return asdict(self)

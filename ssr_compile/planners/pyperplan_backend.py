@@ -86,6 +86,7 @@ class Pyperplan:
             quantifiers=False,
             conditional_effects=False,
             optimal=search in ("opt", "bfs") and not ignore_costs,
+            ground=True,
         )
         import pyperplan.planner  # noqa: F401 - loaded once, before any fork
 

@@ -80,6 +80,9 @@ def engine_capabilities(cls) -> Capabilities:
         and has("FORALL_EFFECTS"),
         conditional_effects=has("CONDITIONAL_EFFECTS"),
         optimal=_optimal(cls),
+        # unified-planning's writer lists every grounding of every predicate over all
+        # objects: hand it the ground task (a few hundred 0-ary facts) instead.
+        ground=True,
     )
 
 
