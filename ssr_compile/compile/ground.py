@@ -241,7 +241,9 @@ class _Grounder:
                 g = self.cond(x, b)
                 if g is FALSE:
                     return FALSE
-                if g is not TRUE:
+                if isinstance(g, S.And):
+                    parts.extend(g.args)  # flat: STRIPS readers refuse nested conjunctions
+                elif g is not TRUE:
                     parts.append(g)
             return TRUE if not parts else parts[0] if len(parts) == 1 else S.And(tuple(parts))
         if isinstance(f, S.Or):
@@ -250,7 +252,9 @@ class _Grounder:
                 g = self.cond(x, b)
                 if g is TRUE:
                     return TRUE
-                if g is not FALSE:
+                if isinstance(g, S.Or):
+                    parts.extend(g.args)
+                elif g is not FALSE:
                     parts.append(g)
             return FALSE if not parts else parts[0] if len(parts) == 1 else S.Or(tuple(parts))
         if isinstance(f, S.Exists):
@@ -456,7 +460,13 @@ def _split_conditional(grounded: Grounded) -> Grounded:
                 for e in effects
                 if isinstance(e, S.When) and holds[conditions.index(e.condition)]
             ]
-            pre = S.And(tuple(x for x in (a.precondition, *guards) if x is not None))
+            parts: list = []
+            for x in (a.precondition, *guards):
+                if isinstance(x, S.And):
+                    parts.extend(x.args)
+                elif x is not None:
+                    parts.append(x)
+            pre = S.And(tuple(parts))
             name = f"{a.name}-c{k}"
             names[name] = grounded.actions[a.name]
             actions.append(S.Action(name, (), pre, S.And(tuple(plain + extra))))
