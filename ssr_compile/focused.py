@@ -103,6 +103,8 @@ class Solution:
     evaluated: list[Result] = field(default_factory=list)
     values: ValueTable | None = None
     message: str = ""
+    # the planner cannot take action costs (pyperplan): it planned with unit costs
+    costs_ignored_by: str | None = None
 
     @property
     def solved(self) -> bool:
@@ -325,7 +327,7 @@ def solve(
 
     def finish(status, plan=None, cost=None, certificate=(), deferred=(), message=""):
         stats.total_time = time.monotonic() - start
-        return Solution(
+        sol = Solution(
             status,
             plan,
             cost,
@@ -336,6 +338,9 @@ def solve(
             values,
             message,
         )
+        if problem.metric is not None and not backend.capabilities.costs:
+            sol.costs_ignored_by = backend.name
+        return sol
 
     while True:
         if time.monotonic() >= deadline:
@@ -568,6 +573,12 @@ def print_solution(solution: Solution, out=sys.stdout) -> None:
     st = solution.stats
     if solution.plan is not None:
         print(f"plan ({len(solution.plan)} actions, cost {solution.cost:g}):", file=out)
+        if solution.costs_ignored_by:
+            print(
+                f"  (costs ignored: {solution.costs_ignored_by} plans with unit costs; the cost "
+                "above counts actions)",
+                file=out,
+            )
         for i, step in enumerate(solution.plan, 1):
             vals = ", ".join(
                 f"{a}={_short(v)}"
