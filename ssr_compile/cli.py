@@ -577,4 +577,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # Run as `python -m ssr_compile.cli`: use the module the subcommands register in (this
+    # file, imported as __main__, is a second copy of it with an empty COMMANDS).
+    from ssr_compile.cli import main as _main
+
+    sys.exit(_main())

@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             if len(jobs) > 1:
                 print(f"== {problem_path}")
-            print_solution(solution)
+            print_solution(solution, out=sys.stdout)
     if args.json:
         print(json.dumps(results if len(results) > 1 else results[0], indent=1, default=str))
     return status
@@ -259,6 +259,24 @@ def _timeout_json(path, message: str, elapsed: float) -> dict:
     }
 
 
+def to_json(value):
+    """A stream value as JSON: numbers as numbers, None as null, numpy arrays and tuples as
+    lists, mappings as objects; anything else as its repr."""
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else repr(value)
+    kind = type(value)
+    if kind.__module__ == "numpy":
+        if hasattr(value, "tolist"):  # arrays and numpy scalars
+            return to_json(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [to_json(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): to_json(v) for k, v in value.items()}
+    return repr(value)
+
+
 def _as_json(path, solution) -> dict:
     return {
         "problem": str(path),
@@ -269,7 +287,7 @@ def _as_json(path, solution) -> dict:
             {
                 "action": s.name,
                 "args": list(s.args),
-                "values": [repr(v) for v in s.values],
+                "values": [to_json(v) for v in s.values],
                 "deferred": list(s.deferred),
             }
             for s in solution.plan or []

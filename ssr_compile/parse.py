@@ -135,7 +135,7 @@ def _value(fields: dict[str, _Part], key: str, default=None):
 
 def _file_parts(items, kind: str) -> tuple[Token, list[_Part], list[str]]:
     """Split a file's children into its name, its blocks, and warnings for trailing text."""
-    name = _first(items, "NAME")
+    name = _first(items, "NAME", "NUMBER")  # a problem may be named by a number
     blocks = [c for c in items if isinstance(c, _Part)]
     strays = [i for i, c in enumerate(items) if isinstance(c, _Marker) and c.type == "stray"]
     warnings: list[str] = []
@@ -624,7 +624,10 @@ def parse_text(
     ``kind`` ("domain", "problem" or "stream") makes any other kind an error.  Warnings (such as
     ignored trailing text) are appended to ``warnings`` as ``"file:line:col: message"``.
     """
+    if text.startswith("\ufeff"):  # a UTF-8 byte-order mark: not part of the text
+        text = text[1:]
     _refuse_control_characters(text, filename)
+    _refuse_deep_nesting(text, filename)
     try:
         node, notes = parser().parse(text)
     except _Problem as p:
@@ -649,6 +652,55 @@ def parse_text(
     if warnings is not None:
         warnings.extend(f"{filename}:{w}" for w in notes)
     return node
+
+
+# Parentheses nested deeper than this are refused when reading: the passes that walk a formula
+# (printing, checking, compiling) recurse once or more per level, and Python's recursion limit
+# ends them at about 250 levels.  Real files nest less than 20 deep.
+MAX_DEPTH = 100
+_KEEP = b"();\n"  # parentheses, and what delimits comments
+_DROP = bytes(i for i in range(256) if i not in _KEEP)
+_COMMENT_PARENS = re.compile(rb";[^\n]*[()]")
+_COMMENT = re.compile(rb";[^\n]*")
+
+
+def _refuse_deep_nesting(text: str, filename: str) -> None:
+    """A PDDLSyntaxError at the first '(' nested more than MAX_DEPTH deep, if there is one."""
+    if text.count("(") <= MAX_DEPTH:
+        return
+    # Fast check (C string operations only): each pass removes the innermost pairs "()", so a
+    # text whose parentheses nest at most MAX_DEPTH deep is left without pairs after that many.
+    parens = text.encode("utf-8", "surrogatepass").translate(None, _DROP)
+    if _COMMENT_PARENS.search(parens):  # parentheses in comments do not count
+        parens = _COMMENT.sub(b"", parens)
+    parens = parens.translate(None, b";\n")
+    for _ in range(MAX_DEPTH):
+        shorter = parens.replace(b"()", b"")
+        if len(shorter) == len(parens):
+            return
+        parens = shorter
+    if b"()" not in parens:
+        return
+    # Too deep: find where, scanning token by token.
+    depth = 0
+    for m in _TOKEN.finditer(text):
+        tok = m.group()
+        if tok == "(":
+            depth += 1
+            if depth > MAX_DEPTH:
+                pos = m.start()
+                line = text.count("\n", 0, pos) + 1
+                col = pos - (text.rfind("\n", 0, pos) + 1) + 1
+                raise PDDLSyntaxError(
+                    f"nested too deeply (limit {MAX_DEPTH}): this '(' opens level "
+                    f"{MAX_DEPTH + 1} of parentheses",
+                    file=filename,
+                    line=line,
+                    col=col,
+                    source=text,
+                )
+        elif tok == ")":
+            depth = max(depth - 1, 0)
 
 
 _CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")

@@ -291,6 +291,8 @@ class Generator:
             raise
         except Exception as e:
             raise StreamError(f"stream '{self.name}' raised {type(e).__name__}: {e}") from e
+        except SystemExit as e:
+            raise _exited(f"stream '{self.name}'", e) from None
         if out is None:  # a generator may yield None to say "nothing this time"
             return None
         return _as_tuple(out, self.name)
@@ -306,11 +308,36 @@ def _as_tuple(out, name: str) -> tuple | None:
     return out
 
 
+def _exited(what: str, e: SystemExit) -> StreamError:
+    """A stream that calls sys.exit() (or raises SystemExit) has failed, it does not end ssr-compile."""
+    return StreamError(
+        f"{what} called sys.exit({e.code!r}); a stream must return (or raise), not exit"
+    )
+
+
+def _brief(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def call_test(fn: Callable, args: tuple, name: str) -> bool:
+    """A test stream's answer: True or False (a numpy bool counts); anything else is an error
+    of the stream (a string such as "False" is not taken as true)."""
     try:
-        return bool(fn(*args))
+        value = fn(*args)
     except Exception as e:
         raise StreamError(f"test stream '{name}' raised {type(e).__name__}: {e}") from e
+    except SystemExit as e:
+        raise _exited(f"test stream '{name}'", e) from None
+    if isinstance(value, bool):
+        return value
+    kind = type(value)
+    if kind.__module__ == "numpy" and kind.__name__ in ("bool_", "bool"):
+        return bool(value)
+    raise StreamError(
+        f"test stream '{name}' returned {_brief(value)} ({kind.__name__}); "
+        "a test stream must return True or False"
+    )
 
 
 def call_function(fn: Callable, args: tuple, name: str) -> float | None:
@@ -319,6 +346,8 @@ def call_function(fn: Callable, args: tuple, name: str) -> float | None:
         value = fn(*args)
     except Exception as e:
         raise StreamError(f"cost function '{name}' raised {type(e).__name__}: {e}") from e
+    except SystemExit as e:
+        raise _exited(f"cost function '{name}'", e) from None
     if value is None:
         return None
     try:
