@@ -138,13 +138,102 @@ def _optimal(cls) -> bool:
         return False
 
 
-def _solve_in_child(domain_path: str, problem_path: str, engine: str, params, timeout: float):
-    """Runs in the forked child: read the PDDL, solve, return plain data."""
-    from unified_planning.io import PDDLReader
+def to_up_problem(domain: Domain, problem: Problem):
+    """A ground task (0-ary predicates, parameterless actions) as a unified-planning
+    ``Problem``, built through UP's public modelling API -- no PDDL text to re-parse (UP's
+    reader takes seconds on a few hundred ground actions)."""
+    from unified_planning.model.metrics import MinimizeActionCosts
+    from unified_planning.shortcuts import (
+        And,
+        BoolType,
+        Fluent,
+        InstantaneousAction,
+        Int,
+        Not,
+        Or,
+    )
+    from unified_planning.shortcuts import Problem as UPProblem
+
+    from .. import syntax as S
+
+    env = _environment()
+    fluents = {d.name: Fluent(d.name, BoolType(), environment=env) for d in domain.predicates}
+    task = UPProblem(problem.name, environment=env)
+    for f in fluents.values():
+        task.add_fluent(f, default_initial_value=False)
+
+    def expr(f):
+        if isinstance(f, S.Atom):
+            if f.args:
+                raise ValueError(f"not a ground task: atom {f} has arguments")
+            return fluents[f.pred]()
+        if isinstance(f, S.Not):
+            return Not(expr(f.arg))
+        if isinstance(f, S.And):
+            return And(*[expr(x) for x in f.args]) if f.args else env.expression_manager.TRUE()
+        if isinstance(f, S.Or):
+            return Or(*[expr(x) for x in f.args]) if f.args else env.expression_manager.FALSE()
+        raise ValueError(f"cannot hand {type(f).__name__} to unified-planning")
+
+    costs = {}
+    for a in domain.actions:
+        if a.parameters:
+            raise ValueError(f"not a ground task: action {a.name} has parameters")
+        act = InstantaneousAction(a.name, _env=env)
+        if a.precondition is not None:
+            act.add_precondition(expr(a.precondition))
+        cost = 0
+        adds, dels, conditional = [], [], []
+        for e in S.conjuncts(a.effect):
+            if isinstance(e, S.NumericEffect):
+                cost += int(e.value.value) if isinstance(e.value, S.Num) else 0
+            elif isinstance(e, S.When):
+                for x in S.conjuncts(e.effect):
+                    positive = not isinstance(x, S.Not)
+                    atom = x if positive else x.arg
+                    conditional.append((expr(e.condition), atom.pred, positive))
+            elif isinstance(e, S.Not):
+                dels.append(e.arg.pred)
+            elif isinstance(e, S.Atom):
+                adds.append(e.pred)
+        for name in dict.fromkeys(adds):
+            act.add_effect(fluents[name](), True)
+        for name in dict.fromkeys(dels):
+            if name not in adds:  # PDDL: add after delete
+                act.add_effect(fluents[name](), False)
+        for cond, name, positive in conditional:
+            act.add_effect(fluents[name](), positive, condition=cond)
+        task.add_action(act)
+        costs[act] = Int(cost)
+    for x in problem.init:
+        if isinstance(x, S.Atom):
+            task.set_initial_value(fluents[x.pred](), True)
+    if problem.goal is not None:
+        task.add_goal(expr(problem.goal))
+    if problem.metric is not None:
+        task.add_quality_metric(MinimizeActionCosts(costs, default=Int(0), environment=env))
+    return task
+
+
+def _is_ground(domain: Domain) -> bool:
+    return (
+        not domain.axioms
+        and all(not a.parameters for a in domain.actions)
+        and all(not p.params for p in domain.predicates)
+    )
+
+
+def _solve_in_child(domain_path, problem_path, engine: str, params, timeout: float, tree=None):
+    """Runs in the forked child: build or read the task, solve, return plain data."""
     from unified_planning.shortcuts import OneshotPlanner
 
     _environment()
-    task = PDDLReader().parse_problem(domain_path, problem_path)
+    if tree is not None:
+        task = to_up_problem(*tree)
+    else:
+        from unified_planning.io import PDDLReader
+
+        task = PDDLReader().parse_problem(domain_path, problem_path)
     task, map_backs = _fit_to_engine(task, oneshot_engines()[engine])
     with OneshotPlanner(name=engine, params=params or None) as planner:
         res = planner.solve(task, timeout=timeout)
@@ -208,9 +297,10 @@ class UnifiedPlanning:
             Path(d_path).write_text(to_text(dom))
             Path(p_path).write_text(to_text(prob))
             left = clock.remaining()
+            tree = (dom, prob) if _is_ground(dom) else None
             status, value = proc.run_forked(
                 _solve_in_child,
-                (d_path, p_path, self.engine, self.params, left),
+                (d_path, p_path, self.engine, self.params, left, tree),
                 timeout=left,
                 log_path=os.path.join(tmp, "engine.log"),
             )
