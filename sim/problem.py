@@ -203,7 +203,7 @@ def state_problem(
     init += [_atom("conf", "arm", tuck), _atom("stow", tuck), _atom("stowempty", tuck)]
     init += [_atom("conf", "arm", carry), _atom("stow", carry), _atom("stowheld", carry)]
     base = obj("bq0", tuple(float(v) for v in known.base))
-    init += [_atom("conf", "base", base), _atom("atconf", "base", base)]
+    init += [_atom("conf", "base", base), _atom("atconf", "base", base), _atom("reached", base)]
     arm = tuple(float(v) for v in known.arm)
     if _same(arm, ARM_TUCK):
         init.append(_atom("atconf", "arm", tuck))
@@ -212,6 +212,7 @@ def state_problem(
     else:
         q0 = obj("aq0", arm)
         init += [_atom("conf", "arm", q0), _atom("atconf", "arm", q0), _atom("reach", base, q0)]
+        init.append(_atom("reached", q0))
     if known.held is None:
         init.append(_atom("handempty"))
     if known.stove_on:
@@ -236,9 +237,10 @@ def state_problem(
         pb = obj(belief_name(o), belief)
         init += [_atom("poseb", o, pb), _atom("atposeb", o, pb)]
         probs = belief.surface_probs()
-        if is_localized(belief):
+        if is_localized(belief):  # (detecting it again stays possible: a plan's tail may)
             s = belief.most_likely_surface()
             init += [_atom("localized", o, pb), _atom("beliefon", o, pb, s)]
+            init.append(_atom("possible", o, pb, s))
             continue
         init += [
             _atom("possible", o, pb, s)

@@ -214,17 +214,18 @@ class KitchenStreams:
         return path
 
     def inv_kin(
-        self, obj: str, p: ObjPose, g: Grasp, base: Conf
+        self, obj: str, p: ObjPose, g: Grasp, base: Conf, seed: Conf | None = None
     ) -> tuple[Conf, tuple[Conf, ...]] | None:
         """Function stream ``inv-kin``: (pre-grasp arm conf, approach path) for grasping
-        ``obj`` at ``p`` with ``g`` from ``base`` (or placing it there when it is held)."""
+        ``obj`` at ``p`` with ``g`` from ``base`` (or placing it there when it is held);
+        ``seed``: the arm configuration to start the IK from."""
         w = self.world
         state = (
             tuple(sorted(w.support.items())),
             tuple(sorted(w.drawer_q.items())),
             None if w.held is None else (w.held.obj, w.held.grasp),
         )
-        key = (obj, p, g, tuple(base), state)
+        key = (obj, p, g, tuple(base), state, None if seed is None else tuple(seed))
         if key in self._kin_cache:
             return self._kin_cache[key]
         w = self.world
@@ -234,7 +235,9 @@ class KitchenStreams:
             tool = multiply(self.world_pose(p), invert(g.pose))
             if holding:
                 w.held.grasp = g.pose
-            path = self.approach_path(base, tool, ignore_hand=() if holding else (obj,))
+            path = self.approach_path(
+                base, tool, ignore_hand=() if holding else (obj,), seed=seed
+            )
         out = None if path is None else (path[0], tuple(path))
         self._kin_cache[key] = out
         return out
@@ -331,7 +334,13 @@ class KitchenStreams:
                 yield (base,)
 
     def plan_drawer(
-        self, drawer: str, q1: float, q2: float, base: Conf, step: float = 0.02
+        self,
+        drawer: str,
+        q1: float,
+        q2: float,
+        base: Conf,
+        step: float = 0.02,
+        seed: Conf | None = None,
     ) -> DrawerMotion | None:
         """Function stream ``pull``/``push``: approach the handle at opening ``q1``, move it to
         ``q2`` (tool following the handle), retreat.  Collision-checked with the drawer (and
@@ -342,7 +351,7 @@ class KitchenStreams:
         with w.saved():
             w.set_drawer(drawer, q1)
             w.set_base(base)
-            start = self.approach_path(base, self.handle_tool(drawer, q1), back=0.08)
+            start = self.approach_path(base, self.handle_tool(drawer, q1), back=0.08, seed=seed)
             if start is None:
                 return None
             moving = self.cartesian_path(base, [self.handle_tool(drawer, q) for q in qs], start[-1])
@@ -361,12 +370,14 @@ class KitchenStreams:
         return DrawerMotion(drawer, tuple(arm), tuple(dq))
 
     # -- stove button ------------------------------------------------------------------------
-    def plan_press(self, base: Conf) -> tuple[tuple[Conf, ...]] | None:
+    def plan_press(self, base: Conf, seed: Conf | None = None) -> tuple[tuple[Conf, ...]] | None:
         """Function stream: approach path to the stove button (pre-press -> press)."""
         w = self.world
         with w.saved():
             w.set_base(base)
-            path = self.approach_path(base, pose(w.button_pose()[0], FACING_X), back=0.08)
+            path = self.approach_path(
+                base, pose(w.button_pose()[0], FACING_X), back=0.08, seed=seed
+            )
         return None if path is None else (tuple(path),)
 
     def sample_press_base(self) -> Iterator[tuple[Conf]]:

@@ -25,7 +25,7 @@ import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
 from ssr_compile.sim.problem import LOCALIZED_STD, ON_PROB, canonical_surface, is_localized
-from ssr_compile.sim.robot import ARM_TUCK
+from ssr_compile.sim.robot import ARM_TUCK, MOUNT_OFFSET
 from ssr_compile.sim.samplers import Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
 from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
@@ -45,6 +45,29 @@ EPS = 0.1  # occlusion tolerance of an observation (paper §V-B)
 DELTA = 0.1  # radius of an observation's region X_i, metres
 C_DETECT = 1.0  # c: one detection
 C_RECOVER = 1.0  # c': a failed detection, then look again
+RETRIES = 3  # random IK restarts may miss: a function stream tries this often before failing
+REACH = 1.2  # metres from the arm's mount beyond which no IK is tried
+SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
+
+
+class ArmConf(tuple):
+    """An arm configuration computed by a stream, equal only to itself.
+
+    Two streams may compute the same joint values (the pre-pose at an open drawer's handle
+    ends a pull and starts a push); as plain tuples they would share one object name, and the
+    next plan's structure (Algorithm 2) would then demand that two *different* streams return
+    one value again -- which no optimistic plan can promise."""
+
+    __slots__ = ()
+
+    def __eq__(self, other: object) -> bool:
+        return self is other
+
+    def __ne__(self, other: object) -> bool:
+        return self is not other
+
+    def __hash__(self) -> int:
+        return id(self)
 
 
 class KitchenModule:
@@ -124,9 +147,38 @@ class KitchenModule:
         p = self.obj_pose(pb)
         return self._each(lambda: self.ks.inv_reach(o, p, g), self._drawer_of(pb))
 
-    def inv_kin(self, o: str, pb: PoseBelief, g: Grasp, bq):
+    # -- acting from where the robot is (issue 11, fault 1) -----------------------------------
+    def _reachable(self, bq, target) -> bool:
+        """Cheap kinematic filter: the arm's mount at ``bq`` is within reach of ``target``."""
+        yaw = bq[2]
+        mount = np.array([bq[0] + MOUNT_OFFSET[0] * math.cos(yaw),
+                          bq[1] + MOUNT_OFFSET[0] * math.sin(yaw), MOUNT_OFFSET[2]])  # fmt: skip
+        return float(np.linalg.norm(np.asarray(target, float) - mount)) <= REACH
+
+    def _snap(self, path, start):
+        """A path starting within :data:`SNAP` of the arm configuration ``start`` starts exactly
+        there (the robot is at ``start``: no arm motion before the action); else ``None``."""
+        if start is None or path is None:
+            return path
+        if float(np.max(np.abs(np.subtract(path[0], start)))) <= SNAP:
+            return (start, *path[1:])
+        return None
+
+    def _kin(self, o: str, pb: PoseBelief, g: Grasp, bq, start=None):
+        p = self.obj_pose(pb)
         with self.planning(self._drawer_of(pb)):
-            return self.ks.inv_kin(o, self.obj_pose(pb), g, bq)
+            if not self._reachable(bq, self.ks.world_pose(p)[0]):
+                return None
+            res = self.ks.inv_kin(o, p, g, bq, seed=start)
+        return self._snap(None if res is None else tuple(res[1]), start)
+
+    def inv_kin(self, o: str, pb: PoseBelief, g: Grasp, bq):
+        path = self._kin(o, pb, g, bq)
+        return None if path is None else (ArmConf(path[0]), path)
+
+    def inv_kin_from(self, o: str, pb: PoseBelief, g: Grasp, bq, aq):
+        path = self._kin(o, pb, g, bq, aq)
+        return None if path is None else (path,)
 
     def plan_base_motion(self, q1, q2):
         with self.planning():
@@ -139,18 +191,47 @@ class KitchenModule:
     def sample_drawer_base(self, d: str):
         return self._each(lambda: self.ks.sample_drawer_base(d))
 
-    def _plan_drawer(self, d: str, a1, a2, bq):
+    def _drawer_motion(self, d: str, a1, a2, bq, start=None):
         with self.planning():
-            m = self.ks.plan_drawer(d, a1[1], a2[1], bq)
-        return None if m is None else (m.arm_path[0], m.arm_path[-1], m)
+            self.world.set_drawer(d, a1[1])
+            if not self._reachable(bq, self.world.handle_pose(d)):
+                return None
+            for _ in range(RETRIES):
+                m = self.ks.plan_drawer(d, a1[1], a2[1], bq, seed=start)
+                path = self._snap(None if m is None else m.arm_path, start)
+                if path is not None:
+                    return DrawerMotion(d, tuple(path), m.drawer_path)
+        return None
+
+    def _plan_drawer(self, d: str, a1, a2, bq):
+        m = self._drawer_motion(d, a1, a2, bq)
+        return None if m is None else (ArmConf(m.arm_path[0]), ArmConf(m.arm_path[-1]), m)
+
+    def _plan_drawer_from(self, d: str, a1, a2, bq, aq):
+        m = self._drawer_motion(d, a1, a2, bq, aq)
+        return None if m is None else (ArmConf(m.arm_path[-1]), m)
 
     def sample_press_base(self, s: str):
         return self._each(self.ks.sample_press_base)
 
-    def plan_press(self, bq):
+    def _press(self, bq, start=None):
         with self.planning():
-            res = self.ks.plan_press(bq)
-        return None if res is None else (res[0][0], res[0])
+            if not self._reachable(bq, self.world.button_pose()[0]):
+                return None
+            for _ in range(RETRIES):
+                res = self.ks.plan_press(bq, seed=start)
+                path = self._snap(None if res is None else tuple(res[0]), start)
+                if path is not None:
+                    return path
+        return None
+
+    def plan_press(self, bq):
+        path = self._press(bq)
+        return None if path is None else (ArmConf(path[0]), path)
+
+    def plan_press_from(self, bq, aq):
+        path = self._press(bq, aq)
+        return None if path is None else (path,)
 
     # -- belief streams ----------------------------------------------------------------------
     def sample_obs(self, o: str, pb: PoseBelief, s: str) -> Iterator[tuple[Observation]]:
@@ -225,6 +306,14 @@ class KitchenModule:
             "plan-push": self._plan_drawer,
             "sample-press-base": self.sample_press_base,
             "plan-press": self.plan_press,
+            "inv-kin-here": self.inv_kin,
+            "plan-pull-here": self._plan_drawer,
+            "plan-push-here": self._plan_drawer,
+            "plan-press-here": self.plan_press,
+            "inv-kin-from": self.inv_kin_from,
+            "plan-pull-from": self._plan_drawer_from,
+            "plan-push-from": self._plan_drawer_from,
+            "plan-press-from": self.plan_press_from,
             "sample-obs": self.sample_obs,
             "update-belief": self.update_belief,
             "test-vis": self.test_vis,
@@ -235,7 +324,7 @@ class KitchenModule:
 
 
 STREAM_INFO = {
-    "sample-grasp": StreamInfo(cost=0.01),
+    "sample-grasp": StreamInfo(cost=0.01, constant_outputs=True),
     "sample-placement": StreamInfo(cost=0.1),
     "inv-reach": StreamInfo(p_success=0.8, cost=1.0),
     "inv-kin": StreamInfo(kind="function", p_success=0.8, cost=0.5),
@@ -246,6 +335,14 @@ STREAM_INFO = {
     "plan-push": StreamInfo(kind="function", p_success=0.9, cost=0.5),
     "sample-press-base": StreamInfo(p_success=0.8, cost=1.0),
     "plan-press": StreamInfo(kind="function", p_success=0.9, cost=0.3),
+    "inv-kin-here": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "plan-pull-here": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "plan-push-here": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "plan-press-here": StreamInfo(kind="function", p_success=0.5, cost=0.3),
+    "inv-kin-from": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "plan-pull-from": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "plan-push-from": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "plan-press-from": StreamInfo(kind="function", p_success=0.5, cost=0.3),
     "sample-obs": StreamInfo(cost=0.05),
     "update-belief": StreamInfo(kind="function", p_success=0.9, cost=0.1),
     "test-vis": StreamInfo(kind="test", p_success=0.7, cost=0.2),

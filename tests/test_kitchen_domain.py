@@ -73,7 +73,9 @@ def test_inspect_opens_detects_closes(files):
     assert skeleton(plan) == [
         ("pull", "bottom_drawer"), ("detect", "block"), ("push", "bottom_drawer")
     ]  # fmt: skip
-    assert plan[0][0] == "move-base"  # to a base pose at the drawer
+    # optimistically the robot may pull from where it is (the *-here streams); the real
+    # streams send it to a base pose at the drawer first (see the Focused test below)
+    assert plan[0][0] in ("move-base", "move-arm")
 
 
 def test_swap_optimistic_plan_inspects_the_goal_drawer(files):

@@ -13,6 +13,7 @@
     (graspable ?o) (tall ?o) (surface ?s) (fixed ?s) (drawer ?d) (placeable ?o ?s)
     (angle ?d ?a) (open ?d ?a) (closed ?d ?a) (above ?d1 ?d2)
     (stow ?q) (stowempty ?q) (stowheld ?q)
+    (reached ?q)                      ; the robot is at configuration ?q (base, arm)
     (possible ?o ?pb ?s)              ; prior belief ?pb may put ?o on ?s (sample-obs there)
     ; static: certified by streams
     (conf ?r ?q) (traj ?r ?t) (poseb ?o ?pb) (grasp ?o ?g)

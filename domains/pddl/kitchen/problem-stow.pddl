@@ -30,6 +30,7 @@
     (stowheld aq-carry)
     (conf base bq0)
     (atconf base bq0)
+    (reached bq0)
     (atconf arm aq-tuck)
     (handempty)
     (graspable block)

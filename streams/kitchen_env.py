@@ -1,0 +1,338 @@
+"""The kitchen in closed loop (paper §III, §VI, §VIII, appendix; issue 11).
+
+:func:`make_episode` builds an :class:`ssr_compile.policy.Episode` for one of the paper's tasks:
+
+* :class:`KitchenEnvironment` is the PyBullet *true* world (``sim.tasks.make_task``): it executes
+  a plan step (base motions land with Gaussian noise; grasps, placements and drawer motions are
+  checked in the true world -- a failed execution is an observation, never an exception) and
+  then looks through the fixed camera (false negatives, Gaussian pose noise).  Its observation
+  is a :class:`KitchenObservation`: what the robot senses of itself (configuration, drawer
+  openings, the stove, what the gripper holds) and the camera's detections.
+* :class:`KitchenAgent` keeps the robot's particle beliefs (canonical frame, see
+  ``sim/problem.py``) and what it knows for certain, determinizes them into the kitchen
+  PDDLStream problem (:func:`ssr_compile.sim.problem.state_problem`) with a streams module bound
+  to its *own* planning world (never the true one), and folds each observation in: every
+  object's belief is updated in the world frame at the drawers' current openings, with the
+  visibility of each particle ray cast in that planning world (closed drawers, the robot, the
+  localized objects at their estimates occlude), so a miss moves only what could have been seen.
+
+Example::
+
+    from ssr_compile.policy import PolicySettings, run_policy
+    from ssr_compile.streams.kitchen_env import make_episode
+    result = run_policy(make_episode("inspect", 0), PolicySettings(variant="both"))
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pybullet as p
+from ssr_compile.sim.actions import BaseNoise, execute
+from ssr_compile.sim.perception import observe
+from ssr_compile.sim.problem import (
+    KnownState,
+    canonical_surface,
+    initial_state,
+    is_localized,
+    state_problem,
+    to_canonical,
+    to_world,
+)
+from ssr_compile.sim.robot import ARM_TUCK
+from ssr_compile.sim.tasks import TASKS, Task, make_task
+from ssr_compile.sim.world import DRAWERS, ExecutionError, World
+
+from ssr_compile import syntax as S
+from ssr_compile.belief.observation import visibility_mask
+from ssr_compile.belief.particles import ObservationModel, PoseBelief, update
+from ssr_compile.focused import Step
+from ssr_compile.parse import parse_file
+from ssr_compile.policy import Episode
+from ssr_compile.resources import domains_dir
+from ssr_compile.stream import StreamsModule
+
+from .kitchen_module import MODEL, STREAM_INFO, KitchenModule, to_action
+
+PLACED_STD = (0.01, 0.01, 0.0, math.radians(3.0))  # belief of an object just placed
+PLACED_PARTICLES = 100
+
+
+@dataclass
+class KitchenObservation:
+    """What the robot receives after an action (or before the first plan)."""
+
+    ok: bool = True
+    message: str = ""
+    base: tuple[float, ...] = ()
+    arm: tuple[float, ...] = ()
+    drawers: dict[str, float] = field(default_factory=dict)
+    held: str | None = None
+    stove_on: bool = False
+    detections: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        seen = ", ".join(sorted(self.detections)) or "nothing"
+        return ("ok" if self.ok else f"FAILED: {self.message}") + f"; sees {seen}"
+
+
+class KitchenEnvironment:
+    """The true kitchen of a task (see the module doc)."""
+
+    def __init__(
+        self,
+        task: Task,
+        rng: np.random.Generator,
+        *,
+        noise: BaseNoise | None = None,
+        model: ObservationModel | None = None,
+    ) -> None:
+        self.task = task
+        self.world: World = task.world
+        self.rng = rng
+        self.noise = BaseNoise() if noise is None else noise
+        self.model = MODEL if model is None else model
+        self.log: list[tuple[str, str]] = []
+
+    def _sense(self, ok: bool = True, message: str = "") -> KitchenObservation:
+        w = self.world
+        return KitchenObservation(
+            ok,
+            message,
+            tuple(float(v) for v in w.robot.get_base()),
+            tuple(float(v) for v in w.robot.get_arm()),
+            dict(w.drawer_q),
+            None if w.held is None else w.held.obj,
+            w.stove_on,
+            observe(w, self.rng, self.model),
+        )
+
+    def observe(self) -> KitchenObservation:
+        return self._sense()
+
+    def execute(self, step: Step) -> KitchenObservation:
+        ok, message = True, ""
+        try:
+            action = to_action(step.name, step.values, self.world.robot.get_arm())
+            if action is not None:
+                out = execute(self.world, action, self.rng, self.noise)
+                ok, message = out.ok, out.message
+        except (ExecutionError, AssertionError, TypeError, ValueError, IndexError) as e:
+            ok, message = False, f"{step.name}: {e}"
+        obs = self._sense(ok, message)
+        self.log.append((str(step), str(obs)))
+        return obs
+
+    def goal_holds(self) -> bool:
+        return self.task.goal_satisfied()
+
+    def close(self) -> None:
+        self.task.close()
+
+
+def _kitchen_files() -> tuple[S.Domain, S.StreamFile]:
+    folder = domains_dir() / "kitchen"
+    return parse_file(folder / "domain.pddl"), parse_file(folder / "stream.pddl")
+
+
+class KitchenAgent:
+    """The robot's side: beliefs, what it knows for certain, its own planning world."""
+
+    def __init__(
+        self,
+        name: str,
+        seed: int,
+        prior: dict[str, list[tuple[str, float]]],
+        goal,
+        rng: np.random.Generator,
+        *,
+        model: ObservationModel | None = None,
+    ) -> None:
+        self.domain, self.streams = _kitchen_files()
+        world = World()
+        for o in list(world.objects):
+            world.remove_object(o)
+        self.task = Task(name, seed, world, prior, goal)
+        self.world = world
+        self.rng = rng
+        self.model = MODEL if model is None else model
+        self.known: KnownState | None = None
+        self.km = KitchenModule(self.task, rng)
+        self.surfaces = {s: canonical_surface(world, s) for s in world.surfaces}
+        self._constants = (
+            {"base", "arm", "stove", "aq-tuck", "aq-carry", "counter", *DRAWERS}
+            | set(prior)
+            | {f"{d}-{k}" for d in DRAWERS for k in ("open", "closed")}
+        )
+
+    # -- the contract ---------------------------------------------------------------------------
+    def problem(self) -> tuple[S.Problem, StreamsModule]:
+        k = self.known
+        assert k is not None, "update(None, observation) first"
+        problem, values = state_problem(self.task, k)
+        self.km.drawers = dict(k.drawers)
+        module = StreamsModule(
+            "ssr_compile.streams.kitchen_module",
+            streams=self.km.streams(),
+            info=dict(STREAM_INFO),
+            values=values,
+        )
+        module.module = self.km
+        return problem, module
+
+    def is_constant(self, name: str) -> bool:
+        return name in self._constants or name.startswith("g-")
+
+    def summary(self) -> str:
+        k = self.known
+        if k is None:
+            return "-"
+        parts = []
+        for o, pb in sorted(k.beliefs.items()):
+            s = pb.most_likely_surface()
+            loc = "loc" if is_localized(pb) else f"std {pb.std(s)[:2].max() * 100:.0f}cm"
+            parts.append(f"{o}: {s} {pb.prob_surface(s):.2f} {loc}")
+        if k.held is not None:
+            parts.append(f"holding {k.held[0]}")
+        opened = [d.split("_")[0] for d, q in sorted(k.drawers.items()) if q > 0.01]
+        parts.append("open: " + (",".join(opened) or "-"))
+        if k.stove_on:
+            parts.append("stove on")
+        if k.cooked:
+            parts.append("cooked " + ",".join(sorted(k.cooked)))
+        return "; ".join(parts)
+
+    def update(self, step: Step | None, obs: KitchenObservation) -> None:
+        if self.known is None:
+            self._start(obs)
+        k = self.known
+        assert k is not None
+        k.base, k.arm, k.drawers = tuple(obs.base), tuple(obs.arm), dict(obs.drawers)
+        k.stove_on = obs.stove_on
+        if step is not None:
+            self._effects(step, obs)
+        if k.stove_on:  # what is on the burner while it is on is cooked
+            for o, pb in k.beliefs.items():
+                if pb.prob_surface("stove") >= 0.95:
+                    k.cooked.add(o)
+        self._look(obs)
+
+    # -- belief update ------------------------------------------------------------------------
+    def _start(self, obs: KitchenObservation) -> None:
+        w = self.world
+        w.set_base(obs.base)
+        w.set_arm(obs.arm)
+        for d, q in obs.drawers.items():
+            w.set_drawer(d, q)
+        self.known = initial_state(self.task, seed=self.task.seed)
+
+    def _placed(self, o: str, pb: PoseBelief) -> PoseBelief:
+        """The belief of ``o`` just placed at the point belief ``pb``: a small cloud."""
+        s, est = pb.point_estimate()
+        n = PLACED_PARTICLES
+        poses = est + self.rng.normal(size=(n, 4)) * np.array(PLACED_STD)
+        surf = self.surfaces[s]
+        poses[:, :2] = surf.clip(poses[:, :2])
+        return PoseBelief(o, (surf,), np.zeros(n, int), poses, None, pb.z_offset)
+
+    def _effects(self, step: Step, obs: KitchenObservation) -> None:
+        k = self.known
+        assert k is not None
+        if step.name == "pick" and obs.held == step.values[0]:
+            o, g = step.values[0], step.values[2]
+            k.held = (o, g)
+            k.beliefs.pop(o, None)
+        elif step.name == "place" and obs.held is None and k.held is not None:
+            o, pb = step.values[0], step.values[1]
+            k.held = None
+            k.beliefs[o] = self._placed(o, pb)
+            if obs.stove_on and pb.most_likely_surface() == "stove":
+                k.cooked.add(o)
+        if obs.held is None and k.held is not None and step.name != "place":
+            k.held = None  # dropped (never expected): the object is lost to the belief
+
+    def _arrange(self) -> None:
+        """The planning world as the robot knows it: its configuration, the drawers, localized
+        objects at their estimates (the others out of the scene)."""
+        w, k = self.world, self.known
+        assert k is not None
+        w.held = None
+        for d, q in k.drawers.items():
+            w.set_drawer(d, q)
+        w.set_base(k.base)
+        w.set_arm(k.arm)
+        for o in list(w.objects):
+            if w.support.get(o) is not None:
+                w.remove_object(o)
+        for o, pb in k.beliefs.items():
+            if is_localized(pb):
+                x, y, z, yaw = to_world(pb, k.drawers).point_estimate()[1]
+                body = w.objects[o]
+                quat = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+                p.resetBasePositionAndOrientation(body, (x, y, z), quat, physicsClientId=w.client)
+
+    def _look(self, obs: KitchenObservation) -> None:
+        k = self.known
+        assert k is not None
+        self._arrange()
+        w = self.world
+        try:
+            for o, pb in sorted(k.beliefs.items()):
+                pbw = to_world(pb, k.drawers)
+                mask = visibility_mask(
+                    pbw, w.camera, w.half_extents[o], ignore=(w.objects[o],)
+                )
+                det = obs.detections.get(o)
+                post = update(pbw, det, mask, self.model, rng=self.rng)
+                k.beliefs[o] = to_canonical(post, k.drawers)
+        finally:
+            for o in list(w.objects):
+                w.remove_object(o)
+            w.set_arm(ARM_TUCK)
+
+    def close(self) -> None:
+        self.world.close()
+
+
+class _KitchenEpisode(Episode):
+    def close(self) -> None:
+        self.environment.close()
+        self.agent.close()  # type: ignore[attr-defined]
+
+
+def make_episode(
+    task: str,
+    seed: int = 0,
+    *,
+    base_noise: float = 0.01,
+    yaw_noise: float = 0.01,
+    p_fn: float = 0.1,
+    gui: bool = False,
+    **options: Any,
+) -> Episode:
+    """An episode of ``task`` (one of ``inspect``, ``stow``, ``swap``, ``cook``) generated from
+    ``seed``: the true world, and an agent that knows the prior, the goal and its own
+    configuration.  ``base_noise``/``yaw_noise``: std of a base motion's landing error (m, rad);
+    ``p_fn``: the camera's false-negative rate."""
+    if task not in TASKS:
+        raise ValueError(f"unknown task {task!r}; expected one of {', '.join(TASKS)}")
+    if options:
+        raise TypeError(f"unknown option(s) {', '.join(sorted(options))}")
+    model = ObservationModel(p_fn=p_fn, sigma=MODEL.sigma)
+    true_task = make_task(task, seed, gui=gui)
+    env = KitchenEnvironment(
+        true_task,
+        np.random.default_rng([seed, 1]),
+        noise=BaseNoise(base_noise, yaw_noise),
+        model=model,
+    )
+    agent = KitchenAgent(
+        task, seed, true_task.prior, true_task.goal, np.random.default_rng([seed, 2]), model=model
+    )
+    return _KitchenEpisode(env, agent, f"kitchen-{task}-{seed}")
+
+
+__all__ = ["KitchenAgent", "KitchenEnvironment", "KitchenObservation", "make_episode"]
