@@ -429,20 +429,28 @@ def solve(
         shared = compiled.instantiation.shared
         facts = _RealFacts(problem, ev)
         failed: set[str] = set()
+        # Facts the stream plan counted on whose producer failed in this iteration: a result
+        # whose domain needs one of them is not evaluated (its domain does not hold), and
+        # what it would certify is unproven too.
+        failed_facts: set[S.Atom] = set()
         for res in ordered:
             if time.monotonic() >= deadline:
                 return finish(
                     "timeout",
                     message=f"time limit of {time_limit:g} s reached while evaluating streams",
                 )
-            if any(x in failed for x in res.instance.inputs):
+            if any(x in failed for x in res.instance.inputs) or any(
+                f in failed_facts for f in res.domain
+            ):
                 failed.update(res.outputs)
+                failed_facts.update(res.certified)
                 continue
             if not shared or not any(x in shared for x in (*res.instance.inputs, *res.outputs)):
                 ok = ev.evaluate(res, binding)
                 ev.record(ok, res.instance.stream)
                 if not ok:
                     failed.update(res.outputs)
+                    failed_facts.update(res.certified)
                     say(f"  {res.instance} failed")
                 continue
             # A shared object stands for every real value bound to it: evaluate the instance
