@@ -323,6 +323,7 @@ def _child(spec: EpisodeSpec, conn, log_path: str | None, started: float) -> Non
         os.setsid()
     except OSError:
         pass
+    _die_with_parent()
     for name in ("SIGTERM", "SIGHUP", "SIGINT"):
         signal.signal(getattr(signal, name), signal.SIG_DFL)
     if log_path:
@@ -359,7 +360,37 @@ def _child(spec: EpisodeSpec, conn, log_path: str | None, started: float) -> Non
     conn.close()
 
 
-_PRELOAD = ["ssr_compile.experiment", "ssr_compile.policy", "ssr_compile.focused", "numpy"]
+def _die_with_parent() -> None:
+    """Linux: be killed when the fork server that made us exits (it exits when the sweep's
+    process does, even on SIGKILL), so that no episode outlives its sweep."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        parent = os.getppid()
+        libc.prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+        if os.getppid() != parent:  # it is gone already
+            os._exit(1)
+    except (OSError, AttributeError):
+        return
+    # The fork server lives on while any of its children holds its "alive" pipe (each child
+    # inherits one); let ours go, so that the server exits with the sweep, and we with it.
+    try:
+        from multiprocessing import forkserver
+
+        server = forkserver._forkserver
+        fd = server._forkserver_alive_fd
+        if fd is not None:
+            os.close(fd)
+            server._forkserver_alive_fd = None
+    except (AttributeError, OSError):
+        pass
+
+
+_PRELOAD = ["ssr_compile.policy", "ssr_compile.focused", "numpy", "ssr_compile.experiment"]
+_WARM = "SSR_EXPERIMENT_WARM"  # example folders whose files and modules the fork server loads
 
 
 @lru_cache(maxsize=1)
@@ -373,15 +404,69 @@ def _context():
     return mp.get_context("spawn")  # pragma: no cover - not on Linux
 
 
+def warm_fork_server(tasks: Iterable[Task]) -> None:
+    """Start the fork server now, having it parse these tasks' examples and import their
+    environment modules once, so that each episode's process starts with them loaded.  No
+    effect once the server runs."""
+    if _context().get_start_method() != "forkserver":
+        return  # pragma: no cover - not on Linux
+    from multiprocessing import forkserver
+
+    folders = sorted({t.folder for t in tasks})
+    with _WARM_LOCK:
+        old = os.environ.get(_WARM)
+        os.environ[_WARM] = json.dumps(folders)  # read by the server's preload of this module
+        try:
+            forkserver.ensure_running()
+        finally:
+            if old is None:
+                os.environ.pop(_WARM, None)
+            else:
+                os.environ[_WARM] = old
+
+
+_WARM_LOCK = threading.Lock()
+
+
+def _warm_from_environment() -> None:
+    """In the fork server (this module is preloaded there): load what ``warm_fork_server``
+    named.  Never raises: a failure here shows in the episode instead."""
+    names = os.environ.get(_WARM)
+    if not names or "multiprocessing.forkserver" not in sys.modules:
+        return
+    try:
+        for folder in json.loads(names):
+            try:
+                load_task(Task(folder, folder, None))
+            except BaseException:  # noqa: BLE001
+                pass
+    except BaseException:  # noqa: BLE001
+        pass
+
+
 class _Active:
     """The episode processes running now (so that an interrupted sweep kills them)."""
 
     def __init__(self):
         self.lock = threading.Lock()
         self.pids: set[int] = set()
+        self.closed = False  # set by kill_all: episodes that start later are killed at once
+
+    def open(self) -> None:
+        with self.lock:
+            self.closed = False
+
+    def add(self, pid: int) -> bool:
+        with self.lock:
+            if not self.closed:
+                self.pids.add(pid)
+                return True
+        kill_tree(pid)
+        return False
 
     def kill_all(self) -> None:
         with self.lock:
+            self.closed = True
             pids = list(self.pids)
         for pid in pids:
             kill_tree(pid)
@@ -458,8 +543,7 @@ def run_isolated(spec: EpisodeSpec, log_dir: str | None = None) -> dict:
     proc = ctx.Process(target=_child, args=(spec, writer, log_path, started), daemon=False)
     proc.start()
     writer.close()
-    with ACTIVE.lock:
-        ACTIVE.pids.add(proc.pid)
+    ACTIVE.add(proc.pid)
     status, payload = None, None
     try:
         deadline = t0 + spec.settings.wall
@@ -483,9 +567,10 @@ def run_isolated(spec: EpisodeSpec, log_dir: str | None = None) -> dict:
         with ACTIVE.lock:
             ACTIVE.pids.discard(proc.pid)
         reader.close()
-        # Anything the episode started in a session of its own and left behind.
-        for p in _descendants(proc.pid):
-            kill_tree(p)
+        try:  # what the episode left running in its process group
+            os.killpg(proc.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
     wall = time.monotonic() - t0
     if status is None:
         status, payload = _exit_reason(proc.exitcode)
@@ -646,6 +731,7 @@ class ProcessExecutor:
                 return None
             return run_isolated(spec, log_dir)
 
+        ACTIVE.open()
         pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="episode")
         try:
             pending = {pool.submit(one, s): s for s in specs}
@@ -826,6 +912,7 @@ def run_sweep(
 
         try:
             if todo:
+                warm_fork_server(s.task for s in todo)
                 executor.run(todo, str(out / "logs") if keep_logs else None, on_result)
         finally:
             if bar:
@@ -1141,3 +1228,6 @@ __all__ = [
     "render_plot",
     "write_report",
 ]
+
+
+_warm_from_environment()

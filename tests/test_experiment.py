@@ -309,7 +309,7 @@ def test_a_hanging_episode_is_killed_at_its_wall_limit(tmp_path):
     assert hang["failure"] == "timeout: wall limit of 3 s reached (killed)"
     assert 3 <= hang["wall_time"] < 15
     assert recs["progress"]["status"] == "finished"  # the other worker went on
-    helper = int(pid_file(seed).read_text())
+    helper = int(pid_file(seed).read_text().split()[1])
     pid_file(seed).unlink()
     for _ in range(50):  # the helper it started in a session of its own is killed too
         if not _alive(helper):
@@ -401,3 +401,77 @@ def test_ray_executor_runs_the_same_sweep(tmp_path, capsys):
     assert run_cli(argv) == 0  # resumes alike: nothing re-run (and no Ray started for nothing)
     assert "ran 0 episode(s)" in capsys.readouterr().err
     assert len(lines(out)) == 4
+
+
+def _fixture_pid_file(seed: int) -> Path:
+    import sys
+
+    sys.path.insert(0, str(FIXTURE))
+    try:
+        from experiment_fixture_env import pid_file
+    finally:
+        sys.path.remove(str(FIXTURE))
+    return pid_file(seed)
+
+
+@pytest.mark.parametrize("how", ["SIGINT", "SIGKILL"])
+def test_no_episode_outlives_its_sweep(tmp_path, how):
+    """Ctrl-C: the sweep kills its episodes' process trees and exits 130; SIGKILL: the
+    episode's process dies with the fork server, which exits with the sweep."""
+    import signal
+    import subprocess
+    import sys
+
+    seed = 910_000 + os.getpid() % 10_000 + (how == "SIGKILL")
+    pids = _fixture_pid_file(seed)
+    pids.unlink(missing_ok=True)
+    out = tmp_path / "killed"
+    sweep = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys; from ssr_compile.cli import main; sys.exit(main(sys.argv[1:]))",
+            "experiment",
+            "--tasks",
+            f"{FIXTURE}:hang",
+            "--variants",
+            "both",
+            "--seeds",
+            str(seed),
+            "--wall-limit",
+            "300",
+            "--no-progress",
+            "-o",
+            str(out),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        for _ in range(300):
+            if pids.exists() and len(pids.read_text().split()) == 2:
+                break
+            time.sleep(0.1)
+        episode, helper = map(int, pids.read_text().split())
+        sweep.send_signal(getattr(signal, how))
+        code = sweep.wait(30)
+    finally:
+        if sweep.poll() is None:
+            sweep.kill()
+        pids.unlink(missing_ok=True)
+    if how == "SIGINT":
+        assert code == 130 and "interrupted" in sweep.stderr.read()
+        dead = (episode, helper)
+    else:
+        dead = (episode,)  # a helper in a session of its own is out of reach after SIGKILL
+        try:
+            os.kill(helper, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    for _ in range(100):
+        if not any(_alive(p) for p in dead):
+            break
+        time.sleep(0.1)
+    assert not any(_alive(p) for p in dead)
+    assert not (out / "episodes.jsonl").read_text().strip()  # nothing recorded for it
