@@ -77,8 +77,14 @@ def test_a_deferrable_test_the_first_step_needs_is_evaluated_now(answer):
         {"check": {"deferrable": True, "kind": "test"}, "fit": {"kind": "test"}},
     )
     sol = solve(
-        parse_domain(DOMAIN), _streams(TEST_OK), _problem("(done a)"), module, defer=True,
-        initial_level=2, max_level=2, time_limit=20,
+        parse_domain(DOMAIN),
+        _streams(TEST_OK),
+        _problem("(done a)"),
+        module,
+        defer=True,
+        initial_level=2,
+        max_level=2,
+        time_limit=20,
     )
     assert calls["check"] == 1
     assert sol.solved is answer
@@ -95,8 +101,14 @@ def test_a_deferrable_test_needed_only_later_is_deferred():
             {"check": {"kind": "test"}, "fit": {"deferrable": True, "kind": "test"}},
         )
         sol = solve(
-            parse_domain(DOMAIN), _streams(TEST_OK), _problem("(placed b s1)"), module,
-            defer=defer, initial_level=2, max_level=2, time_limit=20,
+            parse_domain(DOMAIN),
+            _streams(TEST_OK),
+            _problem("(placed b s1)"),
+            module,
+            defer=defer,
+            initial_level=2,
+            max_level=2,
+            time_limit=20,
         )
         assert sol.solved
         assert [s.name for s in sol.plan] == ["finish", "put"]
@@ -138,8 +150,13 @@ def test_producers_of_what_the_first_action_needs_are_evaluated_even_if_deferrab
         "(:init (item d) (conf q0) (at q0)) (:goal (holding d)))"
     )
     sol = solve(
-        parse_domain(GEN_DOMAIN), _streams(GEN_STREAMS), problem, module, defer=True,
-        initial_level=2, time_limit=20,
+        parse_domain(GEN_DOMAIN),
+        _streams(GEN_STREAMS),
+        problem,
+        module,
+        defer=True,
+        initial_level=2,
+        time_limit=20,
     )
     assert sol.solved
     first = sol.plan[0]
@@ -191,11 +208,74 @@ def test_an_alternative_producer_of_the_same_fact_is_tried():
         {"check-one": {"kind": "test", "p_success": 0.1}, "check-two": {"kind": "test"}},
     )
     sol = solve(
-        parse_domain(DOMAIN), streams, _problem("(done a)"), module, initial_level=2,
-        max_level=3, time_limit=20,
+        parse_domain(DOMAIN),
+        streams,
+        _problem("(done a)"),
+        module,
+        initial_level=2,
+        max_level=3,
+        time_limit=20,
     )
     assert sol.solved
     assert calls["check-two"] == 1
+
+
+def test_every_producer_of_a_fact_is_recorded_in_the_instantiation():
+    """The provenance (objects.json, stream plans) lists every stream that can certify a
+    fact, not only the first one found."""
+    from ssr_compile import syntax as S
+    from ssr_compile.compile.pipeline import compile_problem
+
+    streams = _streams(
+        """
+        (:stream check-one :inputs (?x) :domain (item ?x) :certified (ok ?x))
+        (:stream check-two :inputs (?x) :domain (item ?x) :certified (ok ?x))
+        """
+    )
+    c = compile_problem(parse_domain(DOMAIN), streams, _problem("(done a)"), level=1)
+    producers = c.instantiation.facts[S.Atom("ok", (S.Const("a"),))]
+    assert sorted(r.instance.stream for r in producers) == ["check-one", "check-two"]
+
+
+LOOK_DOMAIN = """
+(define (domain claims3)
+  (:requirements :strips)
+  (:predicates (item ?x) (conf ?q) (kin ?x ?q) (traj ?t) (at ?q) (looked))
+  (:action look :parameters (?t)
+    :precondition (traj ?t)
+    :effect (looked)))
+"""
+LOOK_STREAMS = """
+  (:stream ik :inputs (?x) :domain (item ?x) :outputs (?q) :certified (and (conf ?q) (kin ?x ?q)))
+  (:stream motion :inputs (?q1 ?x ?q2) :domain (and (conf ?q1) (kin ?x ?q2)) :outputs (?t)
+    :certified (traj ?t))
+"""
+
+
+def test_a_deferrable_producer_of_an_input_the_first_step_needs_is_evaluated():
+    """look(?t) needs a real trajectory; the trajectory's input ?q2 comes from a deferrable
+    ik that the action itself never names: it must still be evaluated first."""
+    module, calls = _module(
+        {"ik": lambda x: iter([(("q", x),)]), "motion": lambda q1, x, q2: (("t", q1, q2),)},
+        {"ik": {"deferrable": True}, "motion": {"deferrable": True, "kind": "function"}},
+    )
+    module.values = {"q0": ("q", "start")}
+    problem = parse_problem(
+        "(define (problem p) (:domain claims3) (:objects d q0) "
+        "(:init (item d) (conf q0)) (:goal (looked)))"
+    )
+    sol = solve(
+        parse_domain(LOOK_DOMAIN),
+        _streams(LOOK_STREAMS),
+        problem,
+        module,
+        defer=True,
+        initial_level=2,
+        time_limit=20,
+    )
+    assert sol.solved and not sol.plan[0].deferred
+    assert calls["ik"] == 1
+    assert sol.plan[0].values[0] == ("t", ("q", "start"), ("q", "d"))
 
 
 # ---------------------------------------------------------------- the plan simulator

@@ -1,0 +1,73 @@
+"""Plant known bugs one at a time in a copy of the repository and see which tests catch them.
+
+    python tools/plant_bugs.py tests/test_paper_claims.py tests/test_focused.py
+
+Copies the committed tree (git archive HEAD) to a temporary folder, applies each mutant
+below, runs the given tests there, and prints CAUGHT (with the first failing test) or
+SURVIVED.  Not part of the test suite; a check that the tests would catch a wrong paper.
+"""
+
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+MUTANTS = {
+    "deferral: producers of must-evaluate not added": (
+        "ssr_compile/focused.py",
+        "    stack = list(must)\n",
+        "    stack = []\n",
+    ),
+    "deferral: certified-fact check dropped": (
+        "ssr_compile/focused.py",
+        "            or any(f in first_facts for f in r.certified)\n",
+        "",
+    ),
+    "preimage: add and delete order swapped": (
+        "ssr_compile/preimage.py",
+        "        state = (state - dels) | adds\n",
+        "        state = (state | adds) - dels\n",
+    ),
+    "stream_plan: domain-fact producers not traversed": (
+        "ssr_compile/preimage.py",
+        "        for fact in res.domain:\n            for producer in inst.facts.get(fact, ())[:1]:\n                need(producer)\n        needed.append(res)",
+        "        needed.append(res)",
+    ),
+    "instantiate: alternative producers not recorded": (
+        "ssr_compile/compile/instantiate.py",
+        "                    out.facts.setdefault(atom, []).append(res)\n",
+        "                    out.facts.setdefault(atom, [res])\n",
+    ),
+}
+tests = sys.argv[1:] or ["tests/test_paper_claims.py", "tests/test_focused.py"]
+ROOT = Path(tempfile.mkdtemp(prefix="ssr-plant-"))
+archive = subprocess.run(["git", "archive", "HEAD"], cwd=REPO, capture_output=True, check=True)
+subprocess.run(["tar", "-x", "-C", str(ROOT)], input=archive.stdout, check=True)
+for name, (f, old, new) in MUTANTS.items():
+    p = ROOT / f
+    orig = p.read_text()
+    if old not in orig:
+        print(f"{name}: PATTERN NOT FOUND")
+        continue
+    p.write_text(orig.replace(old, new, 1))
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-q",
+            "-x",
+            "-p",
+            "no:warnings",
+            "-p",
+            "no:cacheprovider",
+            *tests,
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    p.write_text(orig)
+    failed = [l for l in r.stdout.splitlines() if l.startswith("FAILED")]
+    print(f"{name}: {'CAUGHT by ' + failed[0] if r.returncode else 'SURVIVED'}")
