@@ -187,7 +187,7 @@ def test_a_stream_plan_includes_the_producers_of_domain_facts():
     )
     for a_answer in (True, False):
         module, calls = _module(
-            {"test-a": lambda x: a_answer, "test-b": lambda x: True},
+            {"test-a": lambda x, a=a_answer: a, "test-b": lambda x: True},
             {"test-a": {"kind": "test"}, "test-b": {"kind": "test"}},
         )
         sol = solve(domain, streams, problem, module, initial_level=2, max_level=3, time_limit=20)

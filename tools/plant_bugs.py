@@ -69,5 +69,5 @@ for name, (f, old, new) in MUTANTS.items():
         text=True,
     )
     p.write_text(orig)
-    failed = [l for l in r.stdout.splitlines() if l.startswith("FAILED")]
+    failed = [line for line in r.stdout.splitlines() if line.startswith("FAILED")]
     print(f"{name}: {'CAUGHT by ' + failed[0] if r.returncode else 'SURVIVED'}")
