@@ -14,6 +14,46 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 MUTANTS = {
+    "derived: only the first axiom inlined": (
+        "ssr_compile/compile/derived.py",
+        "        for ax in axioms:\n",
+        "        for ax in axioms[:1]:\n",
+    ),
+    "derived: bound variables not renamed apart": (
+        "ssr_compile/compile/derived.py",
+        'renaming = {v: S.Var(f"{v}-d{n}") for v in variables_in(ax.body)}',
+        "renaming = {}",
+    ),
+    "derived: goal not expanded": (
+        "ssr_compile/compile/derived.py",
+        "        problem = replace(problem, goal=map_atoms(problem.goal, expand))\n",
+        "        pass\n",
+    ),
+    "costs: a decrease of total-cost counted as cost": (
+        "ssr_compile/compile/costs.py",
+        '            and e.op == "increase"\n',
+        "",
+    ),
+    "visibility_mask threshold 0.5 -> 0.8": (
+        "ssr_compile/belief/observation.py",
+        '    min_visible_fraction: float = 0.5,\n) -> np.ndarray:\n    """Which particles',
+        '    min_visible_fraction: float = 0.8,\n) -> np.ndarray:\n    """Which particles',
+    ),
+    "camera is_visible threshold 0.5 -> 0.9": (
+        "sim/perception.py",
+        "VISIBLE_FRACTION = 0.5\n",
+        "VISIBLE_FRACTION = 0.9\n",
+    ),
+    "camera is_visible >= -> >": (
+        "sim/perception.py",
+        "visible_fraction(world, name) >= VISIBLE_FRACTION",
+        "visible_fraction(world, name) > VISIBLE_FRACTION",
+    ),
+    "reinvigoration: distance compared with k, not k^2": (
+        "ssr_compile/belief/particles.py",
+        "float(d2.min()) > reinvig_mahalanobis**2",
+        "float(d2.min()) > reinvig_mahalanobis",
+    ),
     "deferral: producers of must-evaluate not added": (
         "ssr_compile/focused.py",
         "    stack = list(must)\n",
@@ -40,7 +80,12 @@ MUTANTS = {
         "                    out.facts.setdefault(atom, [res])\n",
     ),
 }
-tests = sys.argv[1:] or ["tests/test_paper_claims.py", "tests/test_focused.py"]
+tests = sys.argv[1:] or [
+    "tests/test_paper_claims.py",
+    "tests/test_belief_thresholds.py",
+    "tests/test_derived_semantics.py",
+    "tests/test_costs_once.py",
+]
 ROOT = Path(tempfile.mkdtemp(prefix="ssr-plant-"))
 archive = subprocess.run(["git", "archive", "HEAD"], cwd=REPO, capture_output=True, check=True)
 subprocess.run(["tar", "-x", "-C", str(ROOT)], input=archive.stdout, check=True)
