@@ -31,8 +31,25 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
+from .errors import TimeLimitReached
 from .focused import Solution, Step, solve
+from .limits import overrunning_stream, time_limit
 from .stream import StreamsModule
+
+STREAM_GRACE = 1.0  # seconds a planning attempt may overrun its limit before the alarm
+
+
+class StreamOverrun(Exception):
+    """A stream did not return within a planning attempt's limit (and its grace)."""
+
+    def __init__(self, stream: str | None, seconds: float):
+        super().__init__(stream, seconds)
+        self.stream, self.seconds = stream, seconds
+
+    def __str__(self) -> str:
+        who = f"stream '{self.stream}'" if self.stream else "a stream"
+        return f"{who} did not return within the planning limit ({self.seconds:.1f} s)"
+
 
 VARIANTS: dict[str, tuple[bool, bool]] = {
     # name: (plan constraints, deferred streams) -- Table I's four columns
@@ -287,9 +304,7 @@ def _with_kept(
     extra = tuple(S.Typed(n) for n in values if n not in declared)
     present = set(problem.init)
     facts = tuple(
-        f
-        for f in state.kept_facts
-        if f not in present and not any(a.name in clash for a in f.args)
+        f for f in state.kept_facts if f not in present and not any(a.name in clash for a in f.args)
     )
     new_problem = replace(problem, objects=problem.objects + extra, init=problem.init + facts)
     new_module = replace(module, values={**module.values, **values})
@@ -317,139 +332,198 @@ def run_policy(
         )
 
     agent.update(None, env.observe())
-    for index in range(1, settings.max_cycles + 1):
-        cycle_start = time.monotonic()
-        remaining = settings.budget - planning
-        if remaining <= 0:
-            return finish(False, f"planning budget of {settings.budget:g} s exhausted")
-        problem, module = agent.problem()
-        constrained = "-"
-        comparison: float | None = None
-        solution: Solution | None = None
-        spent = {"c": 0.0, "u": 0.0}
-        streams_called = planners_called = 0
-
-        def attempt(prob, mod, limit, key, **kw) -> Solution:
-            nonlocal planning, streams_called, planners_called
-            sol = solve(
-                agent.domain,
-                agent.streams,
-                prob,
-                mod,
-                planner=settings.planner,
-                time_limit=limit,
-                max_cost=settings.max_cost,
-                defer=settings.defer,
-                initial_level=settings.initial_level,
-                max_level=settings.max_level,
-                progress=progress,
-                **kw,
-            )
-            planning += sol.stats.total_time
-            spent[key] += sol.stats.total_time  # noqa: B023 (called within the iteration)
-            streams_called += sum(s.calls for s in sol.stats.streams.values())
-            planners_called += sol.stats.planner_calls
-            return sol
-
-        if settings.constraints and state.tail:
-            limit = min(settings.constrained_time, settings.budget - planning)
-            cprob, cmod = _with_kept(problem, module, state)
-            constants = state.constants | {o.name for o in cprob.objects if agent.is_constant(o.name)}
-            solution = attempt(
-                cprob,
-                cmod,
-                limit,
-                "c",
-                plan_tail=state.tail,
-                is_constant=lambda name, c=constants: name in c,
-            )
-            if solution.solved:
-                constrained = "held"
-                if settings.compare_unconstrained:
-                    other = solve(
-                        agent.domain,
-                        agent.streams,
-                        problem,
-                        module,
-                        planner=settings.planner,
-                        time_limit=settings.unconstrained_time,
-                        max_cost=settings.max_cost,
-                        defer=settings.defer,
-                        initial_level=settings.initial_level,
-                        max_level=settings.max_level,
-                    )
-                    comparison = other.stats.total_time if other.solved else None
-            else:
-                constrained = "timeout" if solution.status == "timeout" else "fell back"
-                solution = None
-        if solution is None:
+    try:
+        for index in range(1, settings.max_cycles + 1):
+            cycle_start = time.monotonic()
             remaining = settings.budget - planning
             if remaining <= 0:
+                return finish(False, f"planning budget of {settings.budget:g} s exhausted")
+            problem, module = agent.problem()
+            constrained = "-"
+            comparison: float | None = None
+            solution: Solution | None = None
+            spent = {"c": 0.0, "u": 0.0}
+            streams_called = planners_called = 0
+
+            def attempt(prob, mod, limit, key, **kw) -> Solution:
+                nonlocal planning, streams_called, planners_called
+                began = time.monotonic()
+                try:
+                    # The solver stops itself at ``limit``; the alarm stops a stream that never
+                    # returns (user code) a little later.
+                    with time_limit(limit + STREAM_GRACE):
+                        sol = solve(
+                            agent.domain,
+                            agent.streams,
+                            prob,
+                            mod,
+                            planner=settings.planner,
+                            time_limit=limit,
+                            max_cost=settings.max_cost,
+                            defer=settings.defer,
+                            initial_level=settings.initial_level,
+                            max_level=settings.max_level,
+                            progress=progress,
+                            **kw,
+                        )
+                except TimeLimitReached as e:
+                    name = overrunning_stream(e)
+                    raise StreamOverrun(name, time.monotonic() - began) from None
+                planning += sol.stats.total_time
+                spent[key] += sol.stats.total_time  # noqa: B023 (called within the iteration)
+                streams_called += sum(s.calls for s in sol.stats.streams.values())
+                planners_called += sol.stats.planner_calls
+                return sol
+
+            if settings.constraints and state.tail:
+                limit = min(settings.constrained_time, settings.budget - planning)
+                cprob, cmod = _with_kept(problem, module, state)
+                constants = state.constants | {
+                    o.name for o in cprob.objects if agent.is_constant(o.name)
+                }
+                solution = attempt(
+                    cprob,
+                    cmod,
+                    limit,
+                    "c",
+                    plan_tail=state.tail,
+                    is_constant=lambda name, c=constants: name in c,
+                )
+                if solution.solved:
+                    constrained = "held"
+                    if settings.compare_unconstrained:
+                        other = solve(
+                            agent.domain,
+                            agent.streams,
+                            problem,
+                            module,
+                            planner=settings.planner,
+                            time_limit=settings.unconstrained_time,
+                            max_cost=settings.max_cost,
+                            defer=settings.defer,
+                            initial_level=settings.initial_level,
+                            max_level=settings.max_level,
+                        )
+                        comparison = other.stats.total_time if other.solved else None
+                else:
+                    constrained = "timeout" if solution.status == "timeout" else "fell back"
+                    solution = None
+            if solution is None:
+                remaining = settings.budget - planning
+                if remaining <= 0:
+                    cycles.append(
+                        _record(
+                            index,
+                            None,
+                            constrained,
+                            spent,
+                            streams_called,
+                            planners_called,
+                            None,
+                            agent,
+                            cycle_start,
+                        )
+                    )
+                    if on_cycle:
+                        on_cycle(cycles[-1])
+                    return finish(False, f"planning budget of {settings.budget:g} s exhausted")
+                solution = attempt(
+                    problem, module, min(settings.unconstrained_time, remaining), "u"
+                )
+            if not solution.solved:
                 cycles.append(
-                    _record(index, None, constrained, spent, streams_called, planners_called,
-                            None, agent, cycle_start)
+                    _record(
+                        index,
+                        None,
+                        constrained,
+                        spent,
+                        streams_called,
+                        planners_called,
+                        solution,
+                        agent,
+                        cycle_start,
+                    )
                 )
                 if on_cycle:
                     on_cycle(cycles[-1])
-                return finish(False, f"planning budget of {settings.budget:g} s exhausted")
-            solution = attempt(
-                problem, module, min(settings.unconstrained_time, remaining), "u"
+                why = (
+                    "planning budget exhausted" if planning >= settings.budget else solution.message
+                )
+                return finish(False, f"no plan: {why}")
+            plan = solution.plan or []
+            if not plan:
+                cycles.append(
+                    _record(
+                        index,
+                        None,
+                        constrained,
+                        spent,
+                        streams_called,
+                        planners_called,
+                        solution,
+                        agent,
+                        cycle_start,
+                    )
+                )
+                if on_cycle:
+                    on_cycle(cycles[-1])
+                return finish(True, "goal belief reached")
+            # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
+            constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
+            constants |= _stream_constants(solution, module)
+            constants |= {n for n in state.kept_values}
+            kept_facts, kept_values = constant_facts(
+                solution,
+                problem,
+                lambda n: n in constants,  # noqa: B023
             )
-        if not solution.solved:
-            cycles.append(
-                _record(index, None, constrained, spent, streams_called, planners_called,
-                        solution, agent, cycle_start)
+            tail = [(s.name, tuple(s.args)) for s in plan[1:]]
+            step = plan[0]
+            before_exec = time.monotonic()
+            observation = env.execute(step)
+            after_exec = time.monotonic()
+            agent.update(step, observation)
+            after_update = time.monotonic()
+            state = ReplanState(
+                tail or None,
+                frozenset(
+                    n
+                    for n in constants
+                    if n in kept_values or n in {o.name for o in problem.objects}
+                ),
+                kept_facts,
+                kept_values,
             )
+            record = _record(
+                index,
+                str(step),
+                constrained,
+                spent,
+                streams_called,
+                planners_called,
+                solution,
+                agent,
+                cycle_start,
+            )
+            record.execution_time = after_exec - before_exec
+            record.comparison_time = comparison
+            record.update_time = after_update - after_exec
+            total = time.monotonic() - cycle_start - (comparison or 0.0)
+            record.overhead_time = max(
+                total - record.planning_time - record.execution_time - record.update_time, 0.0
+            )
+            cycles.append(record)
             if on_cycle:
-                on_cycle(cycles[-1])
-            why = "planning budget exhausted" if planning >= settings.budget else solution.message
-            return finish(False, f"no plan: {why}")
-        plan = solution.plan or []
-        if not plan:
-            cycles.append(
-                _record(index, None, constrained, spent, streams_called, planners_called,
-                        solution, agent, cycle_start)
-            )
-            if on_cycle:
-                on_cycle(cycles[-1])
-            return finish(True, "goal belief reached")
-        # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
-        constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
-        constants |= _stream_constants(solution, module)
-        constants |= {n for n in state.kept_values}
-        kept_facts, kept_values = constant_facts(
-            solution, problem, lambda n: n in constants  # noqa: B023
-        )
-        tail = [(s.name, tuple(s.args)) for s in plan[1:]]
-        step = plan[0]
-        before_exec = time.monotonic()
-        observation = env.execute(step)
-        after_exec = time.monotonic()
-        agent.update(step, observation)
-        after_update = time.monotonic()
-        state = ReplanState(
-            tail or None,
-            frozenset(n for n in constants if n in kept_values or n in {o.name for o in problem.objects}),
-            kept_facts,
-            kept_values,
-        )
-        record = _record(index, str(step), constrained, spent, streams_called, planners_called,
-                         solution, agent, cycle_start)
-        record.execution_time = after_exec - before_exec
-        record.comparison_time = comparison
-        record.update_time = after_update - after_exec
-        total = time.monotonic() - cycle_start - (comparison or 0.0)
-        record.overhead_time = max(
-            total - record.planning_time - record.execution_time - record.update_time, 0.0
-        )
-        cycles.append(record)
-        if on_cycle:
-            on_cycle(record)
+                on_cycle(record)
+    except StreamOverrun as e:
+        planning += e.seconds
+        return finish(False, str(e))
     return finish(False, f"no goal within {settings.max_cycles} cycles")
 
 
-def _record(index, action, constrained, spent, streams_called, planners_called, solution,
-            agent, cycle_start) -> Cycle:
+def _record(
+    index, action, constrained, spent, streams_called, planners_called, solution, agent, cycle_start
+) -> Cycle:
     deferred = len(solution.deferred) if solution is not None else 0
     plan_len = len(solution.plan) if solution is not None and solution.plan is not None else None
     cost = solution.cost if solution is not None and solution.solved else None

@@ -205,3 +205,25 @@ def test_run_json_outcome(capsys):
     assert outcome["success"] is True and outcome["variant"] == "both"
     assert outcome["cycles"] == len(outcome["trace"])
     assert outcome["trace"][-1]["plan_length"] == 0
+
+
+def test_a_stream_that_never_returns_ends_the_episode_naming_it(monkeypatch):
+    episode = progress.make_episode(None, 0)
+    real_problem = episode.agent.problem
+
+    def spinning_problem():
+        problem, module = real_problem()
+
+        def inv_kin_forever(o, p, g, q):
+            while True:
+                pass
+            yield  # pragma: no cover
+
+        module.streams["inv-kin"] = inv_kin_forever
+        return problem, module
+
+    episode.agent.problem = spinning_problem
+    result = run_policy(episode, PolicySettings(unconstrained_time=1.0, budget=5.0))
+    assert not result.success
+    assert "stream 'inv-kin' did not return" in result.reason
+    assert result.actions == []
