@@ -21,7 +21,7 @@ from pathlib import Path
 
 from . import __version__
 from . import syntax as S
-from .errors import SSRError, TimeLimitReached
+from .errors import Failure, SSRError, TimeLimitReached
 
 COMMANDS: dict[
     str, tuple[Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int], str]
@@ -485,15 +485,25 @@ def build_parser() -> argparse.ArgumentParser:
             "optimistic stream instantiation to plain cost-PDDL for classical planners, and "
             "solve with the Focused algorithm."
         ),
-        epilog="Exit codes: 0 success, 1 no plan within the limits, 2 bad input.",
+        epilog=(
+            "Exit codes: 0 success, 1 no plan within the limits, 2 bad input (the message names "
+            "file:line:col), 3 a planner, a stream's code or ssr-compile failed (not the "
+            "input's fault; the message names the backend or the stream, --debug shows the "
+            "traceback), 128+N killed by signal N."
+        ),
     )
     parser.add_argument("--version", action="version", version=f"ssr-compile {__version__}")
+    parser.add_argument("--debug", action="store_true", help=_DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (configure, _run, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         configure(p)
+        p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=_DEBUG_HELP)
         _validate_numbers(p)
     return parser
+
+
+_DEBUG_HELP = "on a failure of a planner, a stream or ssr-compile, print the traceback too"
 
 
 def _load_command_modules() -> None:
@@ -548,10 +558,14 @@ def _terminate(signum, frame):
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
+    debug = bool(argv) and argv[0] == "--debug"
+    if debug:
+        argv.pop(0)
     # The bare form `ssr-compile DOMAIN STREAM [PROBLEM] -o DIR` means `compile`.
     if argv and argv[0] not in COMMANDS and not argv[0].startswith("-") and "compile" in COMMANDS:
         argv.insert(0, "compile")
     args = parser.parse_args(argv)
+    debug = debug or getattr(args, "debug", False)
     if not args.command:
         parser.print_help()
         return 2
@@ -561,6 +575,9 @@ def main(argv: list[str] | None = None) -> int:
             return run(args)
     except SSRError as e:
         print(str(e), file=sys.stderr)
+        return e.exit_code
+    except Failure as e:  # a planner's or a stream's code, not the input
+        _print_failure(str(e), e, debug, e.detail)
         return e.exit_code
     except TimeLimitReached as e:
         print(f"ssr-compile: time limit of {e.seconds:g} s reached", file=sys.stderr)
@@ -574,6 +591,22 @@ def main(argv: list[str] | None = None) -> int:
         return 128 + signum
     except BrokenPipeError:
         return 0
+    except Exception as e:  # noqa: BLE001 - a bug of ssr-compile: one line, exit 3
+        _print_failure(f"ssr-compile: internal error: {type(e).__name__}: {e}", e, debug)
+        return Failure.exit_code
+
+
+def _print_failure(line: str, e: BaseException, debug: bool, detail: str = "") -> None:
+    """One line on stderr; with --debug the traceback (and what the culprit left) first."""
+    if debug:
+        import traceback
+
+        traceback.print_exception(e, file=sys.stderr)
+        if detail:
+            print(detail.rstrip(), file=sys.stderr)
+        print(" ".join(line.split()), file=sys.stderr)
+    else:
+        print(" ".join(line.split()) + " (--debug shows the traceback)", file=sys.stderr)
 
 
 if __name__ == "__main__":

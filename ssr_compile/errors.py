@@ -1,8 +1,12 @@
-"""The one exception family of ssr-compile.
+"""The exceptions of ssr-compile, by whose fault they are.
 
-Every error a user can cause is an :class:`SSRError`.  Errors that point into a file carry the
-file name, line and column and render the offending line with a caret, so the CLI can print
-them as they are and exit with code 2 (DESIGN §7).
+Every error a user's *input* can cause is an :class:`SSRError` (exit 2).  Errors that point
+into a file carry the file name, line and column and render the offending line with a caret, so
+the CLI can print them as they are (DESIGN §7).
+
+A failure of *code* -- a planner backend that crashed, a user's stream implementation that
+raised or misbehaved, a bug in ssr-compile itself -- is a :class:`Failure` (exit 3): one line
+naming the backend or the stream, the traceback behind the CLI's ``--debug``.
 """
 
 from __future__ import annotations
@@ -69,6 +73,49 @@ class UnsupportedError(SSRError):
 
 class StreamError(SSRError):
     """A streams module is missing, fails to import, or lacks a declared stream."""
+
+
+class Failure(Exception):
+    """Code failed, not the input: a planner backend crashed, a stream's code raised, or
+    ssr-compile has a bug.  ``who`` names the culprit (``stream 'ik'``, ``planner fd``) and the
+    one-line ``message`` names it too; ``detail`` is what the culprit left behind (a child
+    process's traceback, a log's tail), shown with ``--debug``."""
+
+    exit_code = 3
+
+    def __init__(self, who: str, message: str, *, detail: str = ""):
+        super().__init__(message)
+        self.who = who
+        self.message = message
+        self.detail = detail
+
+    def __str__(self) -> str:
+        return f"ssr-compile: {self.message}"
+
+
+class StreamFailure(Failure):
+    """A stream implementation raised, exited, or produced something its declaration rules
+    out: a bug in the streams module, not in the PDDL.  ``message`` names the stream."""
+
+    def __init__(self, stream: str, message: str, *, detail: str = ""):
+        super().__init__(f"stream '{stream}'", message, detail=detail)
+        self.stream = stream
+
+
+class PlannerFailure(Failure):
+    """A planner backend crashed or answered with an error."""
+
+    def __init__(self, planner: str, message: str, *, detail: str = ""):
+        super().__init__(f"planner {planner}", f"planner {planner} failed: {message}", detail=detail)
+        self.planner = planner
+
+
+EXIT_CODES = {
+    0: "success",
+    1: "no plan within the limits",
+    2: "bad input",
+    3: "a planner, a stream's code or ssr-compile failed (not the input's fault)",
+}
 
 
 class Terminated(KeyboardInterrupt):

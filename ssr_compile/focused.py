@@ -29,7 +29,7 @@ from typing import Any
 from . import syntax as S
 from .compile.instantiate import Instance, Result, real_function_terms
 from .compile.pipeline import compile_problem
-from .errors import SSRError, StreamError
+from .errors import PlannerFailure, StreamError, StreamFailure
 from .preimage import plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
 
@@ -133,7 +133,16 @@ class _Evaluation:
         self.called = False  # did the last evaluate() call the stream (or reuse an outcome)?
 
     def evaluate(self, res: Result, binding: dict[str, str]) -> bool:
-        """Evaluate one optimistic result under ``binding`` (optimistic -> real names)."""
+        """Evaluate one optimistic result under ``binding`` (optimistic -> real names).
+
+        A stream whose code raises, exits or answers outside its declaration is a
+        :class:`StreamFailure` (the streams module's fault, not the input's)."""
+        try:
+            return self._evaluate(res, binding)
+        except StreamError as e:
+            raise StreamFailure(res.instance.stream, e.message) from e
+
+    def _evaluate(self, res: Result, binding: dict[str, str]) -> bool:
         inputs = tuple(binding.get(x, x) for x in res.instance.inputs)
         inst = Instance(res.instance.stream, inputs, res.instance.kind)
         # Optimistic inputs bound to real values may coincide with an instance evaluated
@@ -387,7 +396,7 @@ def solve(
             + f"; planner {result.status} in {result.time:.3f} s"
         )
         if result.status == "error":
-            raise SSRError(f"planner {backend.name} failed: {result.message}")
+            raise PlannerFailure(backend.name, result.message, detail=result.detail)
         if result.status == "timeout":
             return finish("timeout", message=f"the planner ran out of time at level {level}")
         if result.status != "solved":

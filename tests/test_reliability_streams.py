@@ -115,8 +115,8 @@ def test_a_misbehaving_stream_is_an_error_naming_it(tmp_path, capsys, stream, re
     mod = _module(tmp_path, replace)
     code = main(["solve", D, S, P, "--streams", mod, "--time-limit", "60"])
     out, err = capsys.readouterr()
-    assert code == 2
-    assert message in err and "Traceback" not in err
+    assert code == 3  # the streams module's code failed, not the input (issue 9 item 7)
+    assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert "plan (" not in out
 
 

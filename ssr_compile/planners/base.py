@@ -49,6 +49,7 @@ class PlanResult:
     ``actions`` are ground actions ``(name, args)`` in the input's (lower-case) names, present
     only when ``status == "solved"``; ``cost`` is the plan's cost under the problem's metric
     (the sum of action costs), or the number of actions when the problem has no metric.
+    ``message`` says why there is no plan in one line.
     """
 
     status: str
@@ -57,6 +58,9 @@ class PlanResult:
     time: float
     planner: str
     message: str = ""
+    # What a failed backend left behind (its child's traceback, a log's tail): shown by the
+    # CLI's --debug, never in the one-line message.
+    detail: str = ""
 
     @property
     def solved(self) -> bool:
