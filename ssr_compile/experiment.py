@@ -343,6 +343,7 @@ def _child(spec: EpisodeSpec, conn, log_path: str | None, started: float) -> Non
     try:
         record = run_episode_here(spec)
         record["start_time"] = round(start_time, 4)
+        record["cpu_time"] = _cpu_time()
         msg = (FINISHED, record)
     except MemoryError:
         traceback.print_exc()
@@ -387,6 +388,19 @@ def _die_with_parent() -> None:
             server._forkserver_alive_fd = None
     except (AttributeError, OSError):
         pass
+
+
+def _cpu_time() -> float | None:
+    """CPU seconds (user + system) of this process since its fork, and of the children it
+    waited for (planners)."""
+    try:
+        import resource
+
+        me = resource.getrusage(resource.RUSAGE_SELF)
+        kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return round(me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime, 3)
+    except (ImportError, OSError):  # pragma: no cover - not POSIX
+        return None
 
 
 _PRELOAD = ["ssr_compile.policy", "ssr_compile.focused", "numpy", "ssr_compile.experiment"]

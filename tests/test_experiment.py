@@ -76,7 +76,7 @@ def test_sweep_runs_resumes_and_reports(tmp_path, capsys):
         assert r["task"] == "progress" and r["status"] == "finished"
         assert r["success"] is True and r["failure"] is None  # progress succeeds in 30 s
         assert r["cycles"] >= 2 and r["planner_calls"] >= 1 and r["planning_time"] > 0
-        assert r["wall_time"] >= r["episode_time"]
+        assert r["wall_time"] >= r["episode_time"] and r["cpu_time"] > 0
         assert r["version"] == X.provenance()["version"]
     assert (out / "table.md").is_file() and (out / "table1.png").stat().st_size > 1000
     before = (out / "episodes.jsonl").read_text()
