@@ -28,11 +28,17 @@ def corpus_dir(sub: str = "") -> Path | None:
 
 
 def require_corpus(sub: str = "") -> Path:
-    """The corpus folder, or skip — but under CI (``CI`` set) a missing corpus fails."""
+    """The corpus folder, or skip when this checkout has no shared folder beside it.
+
+    A missing corpus *fails* when it should be there: with ``SSR_REQUIRE_CORPUS`` set, or
+    under CI (``CI`` set) when ``../shared`` exists (the workplace layout without its corpus
+    is a broken checkout, not a machine without the data)."""
     found = corpus_dir(sub)
     if found is None:
         msg = f"the shared corpus ({sub or 'corpus'}) is not at ../shared/corpus or $SSR_CORPUS"
-        if os.environ.get("CI"):
+        if os.environ.get("SSR_REQUIRE_CORPUS") or (
+            os.environ.get("CI") and (ROOT.parent / "shared").is_dir()
+        ):
             pytest.fail(msg)
         pytest.skip(msg)
     return found
