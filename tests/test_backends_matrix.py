@@ -3,9 +3,7 @@
 Each cell compiles the optimistic problem for the backend (ground for pyperplan and the
 unified-planning engines, lifted for Fast Downward), solves it, maps the plan back and checks
 it against the optimistic problem with the project's own simulator (preimage), which reads
-derived predicates and the stream-certified facts.  The unified-planning cells on the kitchen
-take several seconds each: they are marked ``slow`` (still run by default; deselect with
-``-m "not slow"``).
+derived predicates and the stream-certified facts.  Every cell takes at most a few seconds.
 """
 
 from __future__ import annotations
@@ -35,10 +33,7 @@ PLANNERS = ["fd", "pyperplan", "up:fast-downward", "up:pyperplan"]
 def _cells():
     for example, pfile, level in PROBLEMS:
         for planner in PLANNERS:
-            marks = [pytest.mark.slow] if example == "kitchen" and planner.startswith("up:") else []
-            yield pytest.param(
-                example, pfile, level, planner, marks=marks, id=f"{example}/{pfile[:-5]}-{planner}"
-            )
+            yield pytest.param(example, pfile, level, planner, id=f"{example}/{pfile[:-5]}-{planner}")
 
 
 @pytest.mark.parametrize("example,pfile,level,planner", list(_cells()))
