@@ -173,8 +173,15 @@ def test_max_cost_below_the_optimum_is_unsolvable():
 
 
 def test_max_cost_above_the_plan_is_solved():
-    _, sol = run("problem.pddl", max_cost=100.0)
-    assert sol.solved and sol.cost < 100.0
+    # A bound just above the unbounded plan's cost keeps that very plan; one just below it
+    # excludes it (the bound is on the plan's real cost, in the user's units).
+    _, free = run("problem.pddl")
+    assert free.solved
+    _, bounded = run("problem.pddl", max_cost=free.cost + 1e-3)
+    assert bounded.solved and bounded.cost == pytest.approx(free.cost)
+    assert [str(s) for s in bounded.plan] == [str(s) for s in free.plan]
+    _, below = run("problem.pddl", max_cost=free.cost - 1e-3, max_level=4)
+    assert not below.solved or below.cost < free.cost - 1e-3
 
 
 def test_stream_missing_from_module_is_a_stream_error():
@@ -201,7 +208,12 @@ def test_solution_is_unsolvable_when_no_goal_pose_is_free():
     module = fresh_module()
     module.module.REGIONS = {"table": (5.2, 5.2), "goal": (4.9, 5.1)}
     _, sol = run(module=module, max_level=4, time_limit=20)
-    assert sol.status == "unsolvable"
+    assert sol.status == "unsolvable" and sol.plan is None
+    assert "up to level 4" in sol.message
+    assert sol.stats.levels[-1] == 4  # it did try every level up to the maximum
+    # the placements were sampled and each was refused by the collision test
+    assert sol.stats.streams["sample-pose"].successes > 0
+    assert sol.stats.streams["test-cfree"].failures > 0
     assert math.isfinite(sol.stats.total_time)
 
 
