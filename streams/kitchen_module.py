@@ -36,6 +36,7 @@ from ssr_compile.belief.observation import (
     obs_cost,
     update_belief,
     visibility_lower_bound,
+    visibility_mask,
 )
 from ssr_compile.belief.particles import ObservationModel, PoseBelief
 from ssr_compile.stream import StreamInfo, StreamsModule
@@ -47,6 +48,8 @@ C_DETECT = 1.0  # c: one detection
 C_RECOVER = 1.0  # c': a failed detection, then look again
 RETRIES = 3  # random IK restarts may miss: a function stream tries this often before failing
 REACH = 1.2  # metres from the arm's mount beyond which no IK is tried
+MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
+FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
 SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
 
 
@@ -81,6 +84,7 @@ class KitchenModule:
         self.drawers = dict(self.world.drawer_q)  # the openings the robot saw
         self.n_objects = max(1, len(task.prior))
         self._frames = {s: self._canonical_frame(s) for s in self.world.surfaces}
+        self._seeable_cache: dict = {}
 
     # -- planning state -------------------------------------------------------------------
     def _canonical_frame(self, surface: str):
@@ -235,8 +239,13 @@ class KitchenModule:
 
     # -- belief streams ----------------------------------------------------------------------
     def sample_obs(self, o: str, pb: PoseBelief, s: str) -> Iterator[tuple[Observation]]:
-        """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite)."""
+        """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite).  Only particles
+        the fixed camera can see at all (the furniture alone, ``s`` open if it is a drawer)
+        count: a region the cabinet always hides would be detected at no real chance."""
         on = (pb.surface_names == s) & (pb.weights > 0)
+        if not on.any():
+            return
+        on &= self._seeable(o, pb, s)
         if not on.any():
             return
         dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
@@ -251,6 +260,18 @@ class KitchenModule:
             covered[members] = True
             region = ObsRegion(s, pb.poses[members], pb.poses[i], DELTA, members, pb.digest)
             yield (Observation(o, pb.poses[i], region, EPS),)
+
+    def _seeable(self, o: str, pb: PoseBelief, s: str) -> np.ndarray:
+        key = (pb.digest, s)
+        if key not in self._seeable_cache:
+            with self.planning(s if s in DRAWERS else None):
+                self.world.set_base(FAR_AWAY)
+                mask = visibility_mask(
+                    pb, self.world.camera, self.world.half_extents[o],
+                    ignore=(self.world.objects[o],),
+                )  # fmt: skip
+            self._seeable_cache[key] = mask
+        return self._seeable_cache[key]
 
     def update_belief(self, o: str, pb1: PoseBelief, obs: Observation, s: str):
         if not o == pb1.obj == obs.obj:
@@ -291,7 +312,7 @@ class KitchenModule:
         if not o == pb.obj == obs.obj:
             return None
         cost = obs_cost(obs, pb, self.n_objects, C_DETECT, C_RECOVER, MODEL)
-        return cost if math.isfinite(cost) else None
+        return cost if cost <= MAX_OBS_COST else None  # (inf too: no chance at all)
 
     def streams(self) -> dict[str, Callable]:
         return {

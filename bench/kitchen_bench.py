@@ -1,0 +1,112 @@
+"""The kitchen in closed loop (issue 11): tasks x variants x seeds under the online policy.
+
+Each episode is ``run_policy(make_episode(task, seed), PolicySettings(variant=...))`` in the
+PyBullet true world; success is the goal in the true state.  Prints one line per episode and a
+table per (task, variant): successes, mean cycles, mean planning time of the successful
+episodes, constrained attempts that held, fallbacks.  ``--jsonl FILE`` saves every episode.
+
+    python bench/kitchen_bench.py                      # Inspect, variant both, seed 0 (< 1 min)
+    python bench/kitchen_bench.py --full               # 4 tasks x 4 variants x seeds 0-9, 600 s
+    python bench/kitchen_bench.py --tasks inspect stow swap cook --variants neither \\
+        constraints deferred both --seeds 0-9 --budget 600
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+from ssr_compile.policy import VARIANTS, PolicySettings, run_policy
+from ssr_compile.sim.tasks import TASKS
+from ssr_compile.streams.kitchen_env import make_episode
+
+
+def seeds(text: str) -> list[int]:
+    out: list[int] = []
+    for part in text.split(","):
+        if "-" in part:
+            a, b = part.split("-")
+            out += list(range(int(a), int(b) + 1))
+        else:
+            out.append(int(part))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tasks", nargs="+", default=["inspect"], choices=TASKS)
+    ap.add_argument("--variants", nargs="+", default=["both"], choices=list(VARIANTS))
+    ap.add_argument("--seeds", type=seeds, default=[0], help="e.g. 0-9 or 0,3,5")
+    ap.add_argument("--budget", type=float, default=120.0, help="planning time per episode, s")
+    ap.add_argument("--constrained-time", type=float, default=10.0)
+    ap.add_argument("--unconstrained-time", type=float, default=60.0)
+    ap.add_argument("--max-cycles", type=int, default=40)
+    ap.add_argument(
+        "--full",
+        action="store_true",
+        help="every task and variant, seeds 0-9, budget 600 s (hours)",
+    )
+    ap.add_argument("--jsonl", help="append one JSON line per episode to this file")
+    ap.add_argument("-v", "--verbose", action="store_true", help="print every cycle")
+    args = ap.parse_args(argv)
+
+    rows: dict[tuple[str, str], list[dict]] = {}
+    if args.full:
+        args.tasks, args.variants = list(TASKS), list(VARIANTS)
+        args.seeds, args.budget = list(range(10)), 600.0
+    out = open(args.jsonl, "a") if args.jsonl else None
+    for task in args.tasks:
+        for variant in args.variants:
+            for seed in args.seeds:
+                settings = PolicySettings(
+                    variant=variant,
+                    budget=args.budget,
+                    constrained_time=args.constrained_time,
+                    unconstrained_time=args.unconstrained_time,
+                    max_cycles=args.max_cycles,
+                )
+                ep = make_episode(task, seed)
+                start = time.monotonic()
+                try:
+                    res = run_policy(
+                        ep,
+                        settings,
+                        on_cycle=(lambda c: print("   ", c.line())) if args.verbose else None,
+                    )
+                finally:
+                    ep.close()
+                d = {"task": task, "variant": variant, "seed": seed, **res.as_dict()}
+                d["reason"] = res.reason
+                d["actions_executed"] = res.actions
+                d["wall"] = round(time.monotonic() - start, 2)
+                rows.setdefault((task, variant), []).append(d)
+                print(
+                    f"{task:8s} {variant:11s} seed {seed:2d}  "
+                    f"{'SUCCESS' if d['success'] else 'failure'}  cycles {d['cycles']:3d}  "
+                    f"planning {d['planning_time']:7.1f} s  held {d['constrained_held']:2d}  "
+                    f"fallbacks {d['fallbacks']:2d}  ({res.reason})",
+                    flush=True,
+                )
+                if out:
+                    out.write(json.dumps(d) + "\n")
+                    out.flush()
+    if out:
+        out.close()
+    print()
+    print(f"{'task':8s} {'variant':11s} {'success':>9s} {'cycles':>7s} {'planning s':>11s} "
+          f"{'held':>5s} {'fallbacks':>9s}")  # fmt: skip
+    for (task, variant), ds in rows.items():
+        ok = [d for d in ds if d["success"]]
+        plan = sum(d["planning_time"] for d in ok) / len(ok) if ok else float("nan")
+        cyc = sum(d["cycles"] for d in ds) / len(ds)
+        held = sum(d["constrained_held"] for d in ds) / len(ds)
+        fb = sum(d["fallbacks"] for d in ds) / len(ds)
+        print(f"{task:8s} {variant:11s} {len(ok):4d}/{len(ds):<4d} {cyc:7.1f} {plan:11.1f} "
+              f"{held:5.1f} {fb:9.1f}")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
