@@ -3,7 +3,7 @@ at a fixed level, as `ssr-compile plan`), time, plan length, plan cost, compiled
 sizes.  Each plan is checked against the optimistic problem by the project's own simulator.
 
     python bench/backends_bench.py                  # one run per cell (about a minute)
-    python bench/backends_bench.py --runs 3         # medians of 3 runs
+    python bench/backends_bench.py --full           # medians of 3 runs
     python bench/backends_bench.py --planners fd,pyperplan --problems kitchen/stow
 """
 
@@ -72,11 +72,13 @@ def plan_once(example: str, problem_file: str, level: int, planner: str, time_li
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--runs", type=int, default=1)
+    ap.add_argument("--runs", type=int, default=None, help="runs per cell (default 1)")
+    ap.add_argument("--full", action="store_true", help="medians of 3 runs")
     ap.add_argument("--planners", default=",".join(PLANNERS))
     ap.add_argument("--problems", default="", help="comma-separated example/problem filters")
     ap.add_argument("--time-limit", type=float, default=60.0)
     args = ap.parse_args()
+    args.runs = args.runs or (3 if args.full else 1)
     wanted = [w for w in args.problems.split(",") if w]
     print(
         f"{'problem':32s} {'planner':18s} {'status':9s} {'time s':>7s} {'len':>4s} "

@@ -1,7 +1,7 @@
 """Benchmark of the belief layer: Bayesian update time and BVis (BOccluded) time versus the
 number of particles and of occluding objects, plus raw batched ray-cast throughput.
 
-    python bench/belief_bench.py [--quick] [--repeats R] [--seed S]
+    python bench/belief_bench.py [--full] [--repeats R] [--seed S]
 
 Every time is the median of R runs.  A BOccluded evaluation runs BVis (paper §IV-A, §V-B)
 for each occluder: k = 16 poses drawn from its belief, one batched ray cast per pose covering
@@ -53,12 +53,16 @@ def build_scene(cid: int, n_occluders: int, rng: np.random.Generator) -> dict[in
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fewer repeats and occluder counts")
+    ap.add_argument(
+        "--full", action="store_true", help="more repeats and occluder counts (default: quick)"
+    )
+    ap.add_argument("--quick", action="store_true", help="the default (kept for old scripts)")
     ap.add_argument("--repeats", type=int, default=None)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    repeats = args.repeats or (3 if args.quick else 5)
-    occluder_counts = (1, 10) if args.quick else (1, 2, 5, 10)
+    quick = not args.full
+    repeats = args.repeats or (3 if quick else 5)
+    occluder_counts = (1, 10) if quick else (1, 2, 5, 10)
     sizes = (100, 1000, 10000)
     rng = np.random.default_rng(args.seed)
     model = ObservationModel()

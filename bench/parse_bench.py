@@ -1,9 +1,10 @@
 """Parse throughput: ssr-compile's parser against the Lark-based `pddl` package.
 
-Usage: python bench/parse_bench.py [DIR] [--runs N]
+Usage: python bench/parse_bench.py [DIR] [--runs N] [--full]
 
-Parses every .pddl file under DIR (default: the pddlstream example corpus in ../shared/corpus beside the repository when
-it is there) and prints files/s and MB/s, the median of N runs (default 5).  Both parsers are
+Parses every .pddl file under DIR (default: the repository's own files; with ``--full``, the
+pddlstream example corpus at ``$SSR_CORPUS`` or ``shared/corpus`` beside the repository) and
+prints files/s and MB/s, the median of N runs (default 5).  Both parsers are
 built once before timing and read texts already in memory, so only parsing is timed.
 
 The `pddl` package (AI-Planning/pddl) reads plain domain and problem files only; it is timed
@@ -24,7 +25,17 @@ from pathlib import Path
 from ssr_compile.errors import SSRError
 from ssr_compile.parse import parse_text, parser
 
-DEFAULT = Path(__file__).resolve().parent.parent.parent / "shared" / "corpus" / "pddlstream-examples"
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT = ROOT  # the repository's own .pddl files
+
+
+def corpus() -> Path:
+    """The pddlstream example corpus (``--full``): $SSR_CORPUS, or shared/corpus beside the
+    repository."""
+    import os
+
+    base = os.environ.get("SSR_CORPUS") or ROOT.parent / "shared" / "corpus"
+    return Path(base) / "pddlstream-examples"
 
 
 def median_time(fn: Callable[[], object], runs: int) -> float:
@@ -48,9 +59,12 @@ def pddl_parsers() -> dict[str, Callable[[str], object]] | None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dir", nargs="?", type=Path, default=DEFAULT)
+    ap.add_argument("dir", nargs="?", type=Path, default=None)
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--full", action="store_true", help="the pddlstream example corpus")
     args = ap.parse_args(argv)
+    if args.dir is None:
+        args.dir = corpus() if args.full else DEFAULT
     files = sorted(args.dir.rglob("*.pddl")) if args.dir.is_dir() else []
     if not files:
         print(f"no .pddl files under {args.dir}", file=sys.stderr)

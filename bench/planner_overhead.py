@@ -4,7 +4,7 @@ Prints one row per backend and problem, with the ratio of each backend's median 
 in the same run, and the CPU time per call (this process and its children: forked workers,
 planner binaries), which varies less than wall-clock time on a busy machine.  The CPU time of
 ``fd``'s persistent translator worker is not in that column (a child's CPU time is counted
-only once it has been reaped), so read ``fd``'s CPU as the search binary's and this process's.  Usage: ``python bench/planner_overhead.py [--calls 10] [SPEC ...]``.
+only once it has been reaped), so read ``fd``'s CPU as the search binary's and this process's.  Usage: ``python bench/planner_overhead.py [--calls 10] [--full] [SPEC ...]`` (``--full``: 30 calls).
 """
 
 from __future__ import annotations
@@ -40,8 +40,10 @@ def _cpu() -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("specs", nargs="*", default=DEFAULT_SPECS)
-    ap.add_argument("--calls", type=int, default=10)
+    ap.add_argument("--calls", type=int, default=None, help="calls per cell (default 10)")
+    ap.add_argument("--full", action="store_true", help="30 calls per cell")
     args = ap.parse_args()
+    args.calls = args.calls or (30 if args.full else 10)
     specs = ["fd", *(s for s in args.specs if s != "fd")]
     planners = {s: get_planner(s) for s in specs}
     rows = []

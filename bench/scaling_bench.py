@@ -1,7 +1,7 @@
 """Focused solver scaling: generated tamp2d problems with 1..8 blocks to move into one goal
 region, printing solve time, stream calls, planner calls, plan length and cost, and the
 largest compiled problem per size (issue 13: the growth must stay polynomial for problems whose
-plans grow linearly).  Figures, no assertions (DESIGN §2).
+plans grow linearly).  Figures, no assertions.
 
 The problems use ``domains/pddl/tamp2d`` (domain and streams, ``ssr_compile.streams.tamp2d``)
 with generated values: N blocks of width 0.5 in a row on the table, a goal region of 0.8 per

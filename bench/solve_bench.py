@@ -1,10 +1,11 @@
 """Focused solver: median solve time over N runs, planner calls, stream calls and plan cost,
 with and without deferred evaluation (paper §VII), for every example folder in
-``domains/pddl/`` and the compiler test fixture ``tests/fixtures/compile/pp1d`` (DESIGN §2:
-figures, no assertions).  ``size`` is the largest compiled problem of a run (objects/facts of
+``domains/pddl/`` and the compiler test fixture ``tests/fixtures/compile/pp1d`` (figures, no
+assertions).  By default one run of each small example (under a minute); ``--full``: 5 runs,
+and the kitchen's tasks too.  ``size`` is the largest compiled problem of a run (objects/facts of
 the optimistic problem), when the solver reports it.
 
-Run: python bench/solve_bench.py [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer]
+Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer]
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ FIXTURES = {
         },
     )
 }
+
+
+LONG = {"kitchen"}  # examples only --full (or --only) runs
 
 
 def examples():
@@ -84,7 +88,10 @@ def selected(name: str, problem: str, only: list[str]) -> bool:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--runs", type=int, default=None, help="runs per cell (default 1)")
+    ap.add_argument(
+        "--full", action="store_true", help="5 runs per cell, and the kitchen's tasks too"
+    )
     ap.add_argument("--time-limit", type=float, default=60.0)
     ap.add_argument(
         "--only",
@@ -95,6 +102,7 @@ def main() -> None:
     )
     ap.add_argument("--no-defer", action="store_true", help="only the runs without deferral")
     args = ap.parse_args()
+    args.runs = args.runs or (5 if args.full else 1)
     head = (
         f"{'example':16s} {'problem':22s} {'defer':5s} {'status':8s} {'median s':>9s} "
         f"{'planner':>7s} {'streams':>7s} {'cost':>8s} {'size obj/facts':>14s}"
@@ -102,6 +110,8 @@ def main() -> None:
     print(head)
     print("-" * len(head))
     for name, (folder, config) in examples():
+        if name in LONG and not args.full and not any(o.startswith(name) for o in args.only):
+            continue
         problems = config.get("problems") or sorted(x.name for x in folder.glob("problem*.pddl"))
         for problem in problems:
             if not selected(name, problem, args.only):

@@ -1,6 +1,6 @@
-"""Median time of the kitchen streams over 20 calls each (DESIGN §2: figures, no assertions).
+"""Median time of the kitchen streams over 20 calls each (figures, no assertions).
 
-Run: python bench/stream_bench.py
+Run: python bench/stream_bench.py [--full]   (--full: 100 calls each)
 """
 
 from __future__ import annotations
@@ -25,7 +25,13 @@ def _median_ms(fn) -> tuple[float, int]:
     return 1000 * float(np.median(times)), ok
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+
+    global N
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--full", action="store_true", help="100 calls per stream (default 20)")
+    N = 100 if ap.parse_args(argv).full else N
     w = World()
     rng = np.random.default_rng(0)
     ks = KitchenStreams(w, rng)

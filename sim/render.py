@@ -87,7 +87,12 @@ def render_task(task_name: str, seed: int, path: str, view: str = "camera") -> s
                 uv = project(task.world, pts, view)
                 ax.scatter(uv[:, 0], uv[:, 1], s=6, c=PARTICLE_COLORS.get(obj, "blue"), label=obj)
             ax.legend(loc="lower left", fontsize=7)
-        ax.text(5, 15, f"{task_name} seed={seed} goal={task.goal}", fontsize=7, color="black")
+        from ssr_compile.printer import to_text
+
+        from .problem import task_problem
+
+        goal = to_text(task_problem(task)[0].goal)  # the goal as the planner reads it (PDDL)
+        ax.text(5, 15, f"{task_name} seed={seed} goal: {goal}", fontsize=7, color="black")
         fig.savefig(path)
         plt.close(fig)
     finally:

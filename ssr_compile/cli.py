@@ -311,13 +311,17 @@ class time_limit:
 
 def _configure_check(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "files", nargs="+", metavar="FILE", help="domain, problem and stream files (.pddl)"
+        "files",
+        nargs="+",
+        metavar="FILE",
+        help="domain, problem and stream files (.pddl), or an example folder or shipped "
+        "example's name (e.g. kitchen): all its files",
     )
     p.add_argument(
         "--domain",
         metavar="D",
         help="domain file to check problem and stream files against "
-        "(default: the domain file given among FILE)",
+        "(default: the domain file given among FILE); a file that is not a domain is bad input",
     )
 
 
@@ -363,15 +367,45 @@ def load_files(paths: list[str], warnings: list[str]) -> list[tuple[str, str, S.
 
     out = []
     for path in paths:
+        if path == "-":  # standard input
+            data = sys.stdin.buffer.read() if hasattr(sys.stdin, "buffer") else sys.stdin.read()
+            source = data.decode("utf-8", errors="replace") if isinstance(data, bytes) else data
+            out.append((path, source, parse_text(source, "<stdin>", warnings=warnings)))
+            continue
         source = read_source(path)
         out.append((path, source, parse_text(source, path, warnings=warnings)))
     return out
+
+
+def expand_example_files(files: list[str]) -> list[str]:
+    """FILE arguments with each example folder (or shipped example's name) replaced by its
+    domain, stream and problem files."""
+    from .examples import resolve_folder
+
+    out: list[str] = []
+    for name in files:
+        if Path(name).is_file() or name == "-":
+            out.append(name)
+            continue
+        folder = resolve_folder(name)
+        if folder is None or not (folder / "domain.pddl").is_file():
+            out.append(name)  # reported as a file that cannot be read
+            continue
+        out.extend(str(p) for p in example_files(folder))
+    return out
+
+
+def example_files(folder: Path) -> list[Path]:
+    """An example folder's domain, stream and problem files, in that order."""
+    rest = sorted(p for p in folder.glob("*.pddl") if p.name not in ("domain.pddl", "stream.pddl"))
+    return [folder / "domain.pddl", folder / "stream.pddl", *rest]
 
 
 def run_check(args: argparse.Namespace) -> int:
     from .check import check_domain, check_problem, check_streams
 
     warnings: list[str] = []
+    args.files = expand_example_files(args.files)
     paths = list(args.files)
     if args.domain and args.domain not in paths:
         paths.insert(0, args.domain)
@@ -381,8 +415,16 @@ def run_check(args: argparse.Namespace) -> int:
         try:
             loaded.extend(load_files([path], warnings))
         except SSRError as e:
+            if path == args.domain:
+                raise  # nothing can be checked against a domain that does not parse
             print(str(e), file=sys.stderr)
             failed = True
+    if args.domain:
+        role = next((x[2] for x in loaded if x[0] == args.domain), None)
+        if role is not None and not isinstance(role, S.Domain):
+            raise SSRError(
+                f"--domain names a {role.kind} file; expected a domain file", file=args.domain
+            )
     domains = [x for x in loaded if isinstance(x[2], S.Domain)]
     streams = [x for x in loaded if isinstance(x[2], S.StreamFile)]
 
@@ -406,6 +448,13 @@ def run_check(args: argparse.Namespace) -> int:
         elif isinstance(node, S.Problem):
             d = domain_for(path)
             s = streams_for(d[0]) if d else None
+            if d and node.domain_name is not None and node.domain_name != d[2].name:
+                # Said first: the errors that follow come from checking against another domain.
+                print(
+                    f"{path}: the problem is for domain '{node.domain_name}', but is checked "
+                    f"against domain '{d[2].name}' ({d[0]})",
+                    file=sys.stderr,
+                )
             report = check_problem(
                 node, d[2] if d else None, streams=s, filename=path, source=source
             )
@@ -439,7 +488,9 @@ def run_check(args: argparse.Namespace) -> int:
 
 
 def _configure_fmt(p):
-    p.add_argument("file", metavar="FILE", help="domain, problem or stream file")
+    p.add_argument(
+        "file", metavar="FILE", help="domain, problem or stream file ('-': standard input)"
+    )
     p.add_argument("-o", "--output", metavar="OUT", help="write to OUT instead of standard output")
     p.add_argument(
         "--shorthand",
@@ -556,6 +607,9 @@ def _terminate(signum, frame):
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .quiet_pybullet import install
+
+    install()  # PyBullet's "build time" banner is not printed by any command
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     debug = bool(argv) and argv[0] == "--debug"

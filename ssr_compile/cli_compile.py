@@ -12,22 +12,76 @@ from . import cli
 from . import syntax as S
 from .cli import load_files, register, write_files_atomically
 from .errors import SSRError
+from .json_output import document, dumps
 
 
-def _add_inputs(p: argparse.ArgumentParser, problem_optional: bool) -> None:
-    p.add_argument("domain", metavar="DOMAIN", help="domain file")
-    p.add_argument("stream", metavar="STREAM", help="stream file (PDDLStream)")
+def _add_inputs(p: argparse.ArgumentParser, problem_optional: bool, level_help: str) -> None:
     p.add_argument(
-        "problem", metavar="PROBLEM", nargs="?" if problem_optional else None, help="problem file"
+        "domain",
+        metavar="DOMAIN",
+        help="domain file, or an example folder or shipped example's name (e.g. kitchen) in "
+        "place of DOMAIN STREAM PROBLEM (with --problem to choose among its problems)",
     )
+    p.add_argument("stream", metavar="STREAM", nargs="?", help="stream file (PDDLStream)")
+    p.add_argument("problem", metavar="PROBLEM", nargs="?", help="problem file")
     p.add_argument(
-        "--level",
-        type=cli.level,
-        default=3,
-        metavar="N",
-        help="optimistic instantiation depth: stream instances whose inputs need more than N "
-        "chained instances are not made (default 3)",
+        "--problem",
+        dest="problem_name",
+        metavar="NAME",
+        help="with an example: which of its problems (e.g. stow for problem-stow.pddl)",
     )
+    p.add_argument("--level", type=cli.level, default=3, metavar="N", help=level_help)
+    p.set_defaults(problem_optional=problem_optional)
+
+
+def resolve_inputs(args: argparse.Namespace) -> None:
+    """DOMAIN STREAM [PROBLEM], or an example's name/folder (its files, and its problem chosen
+    by --problem): set args.domain, args.stream, args.problem to file paths."""
+    if args.stream is None:
+        from .cli_solve import resolve_folder
+
+        folder = resolve_folder(args.domain)
+        if folder is None:
+            raise SSRError(
+                f"'{args.domain}' is neither an example folder nor a shipped example; expected "
+                "DOMAIN STREAM" + (" [PROBLEM]" if args.problem_optional else " PROBLEM"),
+                file=args.domain,
+            )
+        problems = cli.example_files(folder)[2:]
+        if args.problem_name:
+            names = [
+                args.problem_name,
+                f"{args.problem_name}.pddl",
+                f"problem-{args.problem_name}.pddl",
+            ]
+            chosen = next((folder / n for n in names if (folder / n).is_file()), None)
+            if chosen is None:
+                raise SSRError(
+                    f"no problem '{args.problem_name}' in {folder} (its problems: "
+                    f"{', '.join(_short(p) for p in problems)})",
+                    file=str(folder),
+                )
+        elif len(problems) == 1:
+            chosen = problems[0]
+        elif args.problem_optional and not problems:
+            chosen = None
+        else:
+            raise SSRError(
+                f"{folder.name} has {len(problems)} problems; choose one with --problem "
+                f"({', '.join(_short(p) for p in problems)})"
+            )
+        args.domain = str(folder / "domain.pddl")
+        args.stream = str(folder / "stream.pddl")
+        args.problem = str(chosen) if chosen else None
+        return
+    if args.problem_name:
+        raise SSRError("--problem chooses among an example's problems; give it with a NAME only")
+    if args.problem is None and not args.problem_optional:
+        raise SSRError("expected DOMAIN STREAM PROBLEM, or an example's NAME [--problem P]")
+
+
+def _short(path: Path) -> str:
+    return path.stem.removeprefix("problem-") if path.stem != "problem" else "problem"
 
 
 def load_inputs(args, warnings: list[str]):
@@ -96,7 +150,12 @@ def _caps_for(spec: str | None):
 
 
 def _configure_compile(p: argparse.ArgumentParser) -> None:
-    _add_inputs(p, problem_optional=True)
+    _add_inputs(
+        p,
+        problem_optional=True,
+        level_help="optimistic instantiation depth: stream instances whose inputs need more "
+        "than N chained instances are not made (default 3)",
+    )
     p.add_argument(
         "-o",
         "--output",
@@ -109,7 +168,8 @@ def _configure_compile(p: argparse.ArgumentParser) -> None:
         dest="backend",
         metavar="BACKEND",
         help="lower to what this planner supports (e.g. fd, pyperplan, up:fast-downward); "
-        "default: keep everything (axioms, quantifiers, costs)",
+        "default: keep everything (axioms, quantifiers, costs), which Fast Downward reads; "
+        "unified-planning's PDDL reader needs --for up:... (it has no derived predicates)",
     )
     p.add_argument(
         "--unit-cost", action="store_true", help="drop action costs (every action costs 1)"
@@ -118,6 +178,7 @@ def _configure_compile(p: argparse.ArgumentParser) -> None:
 
 
 def run_compile(args: argparse.Namespace) -> int:
+    resolve_inputs(args)
     try:
         return _run_compile(args)
     except SSRError as e:
@@ -191,12 +252,23 @@ def _run_compile(args: argparse.Namespace) -> int:
 
 
 def _configure_plan(p: argparse.ArgumentParser) -> None:
-    _add_inputs(p, problem_optional=False)
+    _add_inputs(
+        p,
+        problem_optional=False,
+        level_help="first optimistic instantiation depth (default 3); when there is no plan, "
+        "the level is raised (as solve does) up to --max-level",
+    )
+    p.add_argument(
+        "--max-level",
+        type=cli.level,
+        metavar="N",
+        help="the last level tried (default 8, or --level when it is higher)",
+    )
     p.add_argument(
         "--planner",
-        default="fd",
+        default=DEFAULT_PLANNER,
         metavar="NAME",
-        help="planner backend (default fd; see `ssr-compile planners`)",
+        help=f"planner backend (default {DEFAULT_PLANNER}; see `ssr-compile planners`)",
     )
     p.add_argument(
         "--time-limit",
@@ -207,10 +279,24 @@ def _configure_plan(p: argparse.ArgumentParser) -> None:
         "(default 60)",
     )
     p.add_argument("--unit-cost", action="store_true", help="ignore action costs")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print the result as JSON (schema: README, ssr_compile/json_output.py)",
+    )
+
+
+#: the planner of `plan` (README, "Default planners": chosen by bench/planner_choice_bench.py)
+DEFAULT_PLANNER = "fd:opt"
+LEVEL_LIMIT = "level_limit"  # no plan up to the last level, and instances were cut off
 
 
 def run_plan(args: argparse.Namespace) -> int:
+    resolve_inputs(args)
+    top = args.max_level if args.max_level is not None else max(8, args.level)
+    if top < args.level:
+        raise SSRError(f"--max-level {top} is below --level {args.level}")
+    args.max_level = top
     try:
         return _run_plan(args)
     except SSRError as e:
@@ -221,58 +307,71 @@ def _run_plan(args: argparse.Namespace) -> int:
     from .compile.pipeline import compile_problem
     from .errors import TimeLimitReached
     from .planners import get_planner
-    from .planners.base import TIMEOUT, PlanResult
+    from .planners.base import TIMEOUT, UNSOLVABLE, PlanResult
     from .preimage import plan_preimage, stream_plan
 
     warnings: list[str] = []
     start = time.monotonic()
     phase = "reading the files"
+    level = args.level
+    compiled = None
     # The limit bounds the whole command; the planner gets what is left of it and stops on its
     # own, the alarm (a little later) stops reading and compiling.
     try:
         with cli.time_limit(args.time_limit + _GRACE):
             domain, streams, problem = load_inputs(args, warnings)
             backend = get_planner(args.planner)
-            phase = "compiling"
-            compiled = compile_problem(
-                domain,
-                streams,
-                problem,
-                caps=backend.capabilities,
-                level=args.level,
-                unit_cost=args.unit_cost,
-            )
-            phase = "planning"
-            left = args.time_limit - (time.monotonic() - start)
-            if left <= 0:
-                raise TimeLimitReached(args.time_limit)
-            result = backend.solve(compiled.domain, compiled.problem, time_limit=left)
+            while True:
+                phase = "compiling"
+                compiled = compile_problem(
+                    domain,
+                    streams,
+                    problem,
+                    caps=backend.capabilities,
+                    level=level,
+                    unit_cost=args.unit_cost,
+                )
+                phase = "planning"
+                left = args.time_limit - (time.monotonic() - start)
+                if left <= 0:
+                    raise TimeLimitReached(args.time_limit)
+                result = backend.solve(compiled.domain, compiled.problem, time_limit=left)
+                if result.status != UNSOLVABLE or compiled.instantiation.saturated:
+                    break  # solved, out of time, failed, or no plan with every instance made
+                if level >= args.max_level:
+                    result.status = LEVEL_LIMIT
+                    result.message = (
+                        f"no optimistic plan up to level {level}, where stream instances were "
+                        f"cut off ({result.message}); try --max-level {level + 2}"
+                    )
+                    break
+                level += 1
     except TimeLimitReached:
         for w in warnings:
             print(w, file=sys.stderr)
         message = f"time limit of {args.time_limit:g} s reached while {phase}"
         result = PlanResult(TIMEOUT, None, None, time.monotonic() - start, args.planner, message)
-        if args.json:
-            report = {
-                "status": TIMEOUT,
-                "planner": args.planner,
-                "time": round(result.time, 4),
-                "level": args.level,
-                "message": message,
-            }
-            print(json.dumps(report, indent=1))
-        else:
-            print(f"no plan ({TIMEOUT}) at level {args.level}: {message}")
-        return 1
-    for w in warnings:
-        print(w, file=sys.stderr)
-    if result.status == "error":
-        raise SSRError(f"planner {args.planner} failed: {result.message}")
+    else:
+        for w in warnings:
+            print(w, file=sys.stderr)
+        if result.status == "error":
+            raise SSRError(f"planner {args.planner} failed: {result.message}")
+        if result.status == UNSOLVABLE:
+            result.message = (
+                f"no optimistic plan at any level: every stream instance was made by level "
+                f"{level} ({result.message})"
+            )
     report: dict = {
+        "problem": str(args.problem),
         "status": result.status,
         "planner": args.planner,
-        "time": round(result.time, 4),
-        "level": args.level,
+        "time": round(time.monotonic() - start, 4),
+        "level": level,
+        "message": None if result.solved else result.message,
+        "cost": None,
+        "scale": compiled.scale if compiled is not None else None,
+        "plan": [],
+        "stream_plan": [],
     }
     if result.solved:
         plan = compiled.map_plan(result.actions or [])
@@ -281,7 +380,6 @@ def _run_plan(args: argparse.Namespace) -> int:
         report.update(
             plan=[{"action": n, "args": list(a)} for n, a in plan],
             cost=(result.cost or 0) / compiled.scale,
-            scale=compiled.scale,
             stream_plan=[
                 {
                     "stream": r.instance.stream,
@@ -291,13 +389,12 @@ def _run_plan(args: argparse.Namespace) -> int:
                 for r in needed
             ],
         )
-    else:
-        report["message"] = result.message
     if args.json:
-        print(json.dumps(report, indent=1))
+        print(dumps(document("plan", results=[report])))
     elif result.solved:
         print(
-            f"optimistic plan ({len(report['plan'])} actions, cost {report['cost']:g}, planner {args.planner}, {result.time:.3f} s):"
+            f"optimistic plan ({len(report['plan'])} actions, cost {report['cost']:g}, planner "
+            f"{args.planner}, level {level}, {report['time']:.3f} s):"
         )
         for i, step in enumerate(report["plan"], 1):
             print(f"  {i:2d}. ({' '.join([step['action'], *step['args']])})")
@@ -306,7 +403,7 @@ def _run_plan(args: argparse.Namespace) -> int:
             outs = f" -> {', '.join(r['outputs'])}" if r["outputs"] else ""
             print(f"  {r['stream']}({', '.join(r['inputs'])}){outs}")
     else:
-        print(f"no plan ({result.status}) at level {args.level}: {result.message}")
+        print(f"no plan ({result.status}) at level {level}: {result.message}")
     return 0 if result.solved else 1
 
 
@@ -327,7 +424,7 @@ def run_planners(args: argparse.Namespace) -> int:
 
     rows = describe_planners()
     if args.json:
-        print(json.dumps(rows, indent=1))
+        print(dumps(document("planners", planners=rows)))
         return 0
     features = [
         "costs",

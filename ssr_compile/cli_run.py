@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .cli import register
 from .errors import SSRError
+from .json_output import SCHEMA_VERSION
 
 KITCHEN_TASKS = ("inspect", "stow", "swap", "cook")
 
@@ -159,6 +160,8 @@ def run(args: argparse.Namespace) -> int:
         if log_file is not None:
             log_file.close()
     outcome = {
+        "schema_version": SCHEMA_VERSION,  # README, "JSON output"; ssr_compile/json_output.py
+        "command": "run",
         "example": example.name,
         "problem": problem,
         "seed": args.seed,

@@ -134,7 +134,8 @@ register(
 )
 register(
     "belief-plot",
-    "draw a kitchen task's prior pose beliefs (particles coloured by weight) as a PNG",
+    "draw a kitchen task's prior pose beliefs as a PNG (one colour per object, weight as "
+    "opacity and size; stacked surfaces such as the drawers in panels of their own)",
     _configure_belief_plot,
     run_belief_plot,
 )

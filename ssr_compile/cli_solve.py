@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -12,6 +12,7 @@ from pathlib import Path
 from . import cli
 from .cli import register
 from .errors import SSRError, TimeLimitReached
+from .json_output import document, dumps, to_json
 
 try:  # Python 3.11+
     import tomllib
@@ -19,7 +20,19 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 
+_DEFAULTS_NOTE = (
+    "With an example FOLDER, the settings in its example.toml (planner, time_limit, level, "
+    "max_level, max_cost, defer) apply first, in place of the defaults below; an option given "
+    "on the command line always wins.  -v prints the settings in force and where each came "
+    "from (flag, example.toml, default)."
+)
+
+
 def _configure(p: argparse.ArgumentParser) -> None:
+    p.description = (
+        "Solve a PDDLStream problem with the Focused algorithm and Python streams.  "
+        + _DEFAULTS_NOTE
+    )
     p.add_argument(
         "inputs",
         nargs="+",
@@ -38,44 +51,163 @@ def _configure(p: argparse.ArgumentParser) -> None:
         help="with FOLDER: which problem file (default: all in example.toml)",
     )
     p.add_argument(
-        "--planner", metavar="NAME", help="planner backend (default fd; see `ssr-compile planners`)"
+        "--planner",
+        metavar="NAME",
+        help=f"planner backend (default {DEFAULTS['planner']}, or example.toml's; see "
+        "`ssr-compile planners`)",
     )
     p.add_argument(
         "--time-limit",
         type=cli.seconds,
         metavar="S",
-        help="time limit in seconds for each problem (default 60)",
+        help="time limit in seconds for each problem (default 60, or example.toml's)",
     )
     p.add_argument(
         "--max-cost",
         type=cli.cost_bound,
         metavar="C",
-        help="only accept plans cheaper than C (the paper's c*)",
+        help="only accept plans cheaper than C, in the problem's cost units (the paper's c*; "
+        "default: no bound)",
     )
     p.add_argument(
-        "--level", type=cli.level, metavar="N", help="first instantiation level (default 1)"
+        "--level",
+        type=cli.level,
+        metavar="N",
+        help="first instantiation level (default 1, or example.toml's)",
     )
     p.add_argument(
-        "--max-level", type=cli.level, metavar="N", help="give up above this level (default 8)"
+        "--max-level",
+        type=cli.level,
+        metavar="N",
+        help="give up above this level (default 8, or example.toml's)",
     )
     p.add_argument(
         "--defer",
-        action="store_true",
-        help="defer deferrable streams not needed by the first action (paper §VII)",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="defer deferrable streams not needed by the first action (paper §VII; default "
+        "off, or example.toml's); --no-defer turns it off",
     )
     p.add_argument(
         "--seed",
         type=cli.seed,
-        default=0,
         metavar="N",
         help="seed for the streams module's random numbers (default 0)",
     )
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print the result as JSON (schema: README, ssr_compile/json_output.py)",
+    )
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help="with --json: every value in full (default: long paths summarised)",
+    )
     p.add_argument(
         "-v",
         "--verbose",
         action="store_true",
-        help="print progress: iterations, levels, stream plans",
+        help="print the settings in force and progress: iterations, levels, stream plans",
+    )
+    p.epilog = _DEFAULTS_NOTE
+
+
+# The settings of a solve: default value, validation (of example.toml's text), and how a
+# value prints.  Every one of them can be given on the command line, example.toml, or neither.
+DEFAULTS = {
+    "planner": "fd",
+    "time_limit": 60.0,
+    "level": 1,
+    "max_level": 8,
+    "max_cost": math.inf,
+    "defer": False,
+    "seed": 0,
+}
+_FLAGS = {
+    "planner": "--planner",
+    "time_limit": "--time-limit",
+    "level": "--level",
+    "max_level": "--max-level",
+    "max_cost": "--max-cost",
+    "defer": "--defer/--no-defer",
+    "seed": "--seed",
+}
+
+
+def _check_bool(text: str) -> bool:
+    if text in ("True", "true"):
+        return True
+    if text in ("False", "false"):
+        return False
+    raise argparse.ArgumentTypeError(f"expected true or false, got '{text}'")
+
+
+def _check_name(text: str) -> str:
+    if not text:
+        raise argparse.ArgumentTypeError("expected a planner name")
+    return text
+
+
+_CHECKS = {
+    "planner": _check_name,
+    "time_limit": cli.seconds,
+    "level": cli.level,
+    "max_level": cli.level,
+    "max_cost": cli.cost_bound,
+    "defer": _check_bool,
+    "seed": cli.seed,
+}
+
+
+def resolve_settings(args: argparse.Namespace, config: dict, config_file: str = "example.toml"):
+    """{name: (value, source)}: each setting from its flag, else example.toml, else the default.
+
+    A flag always wins: a level from example.toml above a --max-level given on the command line
+    is lowered to it (and a --level above example.toml's max_level raises that)."""
+    out: dict[str, tuple] = {}
+    for name, default in DEFAULTS.items():
+        value = getattr(args, name, None)
+        if value is not None:
+            out[name] = (value, "flag " + _FLAGS[name])
+        elif name in config:
+            try:  # example.toml's values pass the same validation as the options
+                out[name] = (_CHECKS[name](str(config[name])), "example.toml")
+            except argparse.ArgumentTypeError as e:
+                raise SSRError(f"{name} = {config[name]!r}: {e}", file=config_file) from None
+        else:
+            out[name] = (default, "default")
+    (level, lsrc), (top, tsrc) = out["level"], out["max_level"]
+    if level > top:
+        if tsrc.startswith("flag") and not lsrc.startswith("flag"):
+            out["level"] = (top, f"{lsrc}, lowered to --max-level")
+        elif lsrc.startswith("flag") and not tsrc.startswith("flag"):
+            out["max_level"] = (level, f"{tsrc}, raised to --level")
+        else:
+            where = "example.toml" if lsrc == tsrc == "example.toml" else None
+            raise SSRError(
+                f"the first level ({level}, {lsrc}) is above the last ({top}, {tsrc})",
+                file=where and config_file,
+            )
+    return out
+
+
+def _format_setting(name: str, value) -> str:
+    if name == "time_limit":
+        return f"{value:g} s"
+    if name == "max_cost":
+        return "none" if math.isinf(value) else f"{value:g}"
+    if name == "defer":
+        return "on" if value else "off"
+    return str(value)
+
+
+def describe_settings(settings: dict) -> str:
+    """One line per setting: its value and where it came from."""
+    width = max(len(n) for n in settings)
+    return "\n".join(
+        f"  {name.replace('_', ' ').ljust(width)}  {_format_setting(name, v)}  ({src})"
+        for name, (v, src) in settings.items()
     )
 
 
@@ -143,28 +275,21 @@ def run(args: argparse.Namespace) -> int:
     from .focused import print_solution, solve
     from .stream import module_for_problem
 
+    if args.full and not args.json:
+        raise SSRError("--full goes with --json (it prints every value in full)")
     jobs, config = jobs_from_args(args)
     module_spec = args.streams or config.get("streams")
     if not module_spec:
         raise SSRError('example.toml does not name a streams module (streams = "...")')
-    planner = args.planner or config.get("planner", "fd")
-
-    def setting(name, default, check):
-        value = getattr(args, name)
-        if value is not None:
-            return value
-        if name not in config:
-            return default
-        try:  # example.toml's numbers pass the same validation as the options
-            return check(str(config[name]))
-        except argparse.ArgumentTypeError as e:
-            raise SSRError(f"{name} = {config[name]!r}: {e}", file="example.toml") from None
-
-    time_limit = setting("time_limit", 60.0, cli.seconds)
-    defer = args.defer or bool(config.get("defer", False))
-    level = setting("level", 1, cli.level)
-    max_level = setting("max_level", 8, cli.level)
-    max_cost = args.max_cost if args.max_cost is not None else math.inf
+    config_file = str(jobs[0][0].parent / "example.toml") if config else "example.toml"
+    settings = resolve_settings(args, config, config_file)
+    if args.verbose:
+        print("settings in force:", file=sys.stderr)
+        print(describe_settings(settings), file=sys.stderr)
+    planner, time_limit, level, max_level, max_cost, defer, seed = (
+        settings[n][0]
+        for n in ("planner", "time_limit", "level", "max_level", "max_cost", "defer", "seed")
+    )
     results = []
     status = 0
     for domain_path, stream_path, problem_path in jobs:
@@ -179,7 +304,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             with cli.time_limit(time_limit + _GRACE):
                 domain, streams, problem = load_inputs(ns, warnings)
-                module = module_for_problem(module_spec, problem_path, args.seed)
+                module = module_for_problem(module_spec, problem_path, seed)
                 module.check_against(streams, str(stream_path))
                 progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
                 for w in warnings if args.verbose else ():
@@ -212,15 +337,24 @@ def run(args: argparse.Namespace) -> int:
             continue
         if not solution.solved:
             status = 1
+        if solution.message and not math.isinf(max_cost):
+            solution.message = in_user_units(solution.message, max_cost)
         if args.json:
-            results.append(_as_json(problem_path, solution))
+            results.append(_as_json(problem_path, solution, args.full))
         else:
             if len(jobs) > 1:
                 print(f"== {problem_path}")
             print_solution(solution, out=sys.stdout)
     if args.json:
-        print(json.dumps(results if len(results) > 1 else results[0], indent=1, default=str))
+        shown = {n: {"value": to_json(v), "source": src} for n, (v, src) in settings.items()}
+        print(dumps(document("solve", settings=shown, results=results)))
     return status
+
+
+def in_user_units(message: str, max_cost: float) -> str:
+    """The planner states the cost bound it was given in the compiler's integer units (costs
+    scaled by 10^k): say the user's --max-cost instead."""
+    return re.sub(r"cost bound -?[0-9][0-9.e+]*", f"cost bound {max_cost:g}", message)
 
 
 # The solver stops itself at its deadline; the alarm that stops a stuck stream (or reading,
@@ -259,25 +393,7 @@ def _timeout_json(path, message: str, elapsed: float) -> dict:
     }
 
 
-def to_json(value):
-    """A stream value as JSON: numbers as numbers, None as null, numpy arrays and tuples as
-    lists, mappings as objects; anything else as its repr."""
-    if value is None or isinstance(value, (bool, int, str)):
-        return value
-    if isinstance(value, float):
-        return value if math.isfinite(value) else repr(value)
-    kind = type(value)
-    if kind.__module__ == "numpy":
-        if hasattr(value, "tolist"):  # arrays and numpy scalars
-            return to_json(value.tolist())
-    if isinstance(value, (list, tuple)):
-        return [to_json(v) for v in value]
-    if isinstance(value, dict):
-        return {str(k): to_json(v) for k, v in value.items()}
-    return repr(value)
-
-
-def _as_json(path, solution) -> dict:
+def _as_json(path, solution, full: bool = False) -> dict:
     return {
         "problem": str(path),
         "status": solution.status,
@@ -287,7 +403,7 @@ def _as_json(path, solution) -> dict:
             {
                 "action": s.name,
                 "args": list(s.args),
-                "values": [to_json(v) for v in s.values],
+                "values": [to_json(v, full) for v in s.values],
                 "deferred": list(s.deferred),
             }
             for s in solution.plan or []

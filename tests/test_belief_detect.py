@@ -412,7 +412,7 @@ def test_cli_solve_reads_example_toml(capsys):
     from ssr_compile.cli import main
 
     assert main(["solve", str(FOLDER), "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["results"]
     plans = {Path(r["problem"]).stem: [s["action"] for s in r["plan"]] for r in out}
     assert plans["problem-clear"] == ["detect", "pick"]
     assert plans["problem-occluded"][0] == "move-aside" and plans["problem-occluded"][1:] == [

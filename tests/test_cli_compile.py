@@ -51,7 +51,7 @@ def test_plan_prints_plan_cost_and_instances(capsys):
 
 def test_plan_json(capsys):
     assert main(["plan", D, S, P, "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
+    data = json.loads(capsys.readouterr().out)["results"][0]
     assert data["status"] == "solved" and data["plan"][-1]["action"] == "place"
     assert data["cost"] == len(data["plan"])
     streams = {r["stream"] for r in data["stream_plan"]}
@@ -62,7 +62,7 @@ def test_plan_json(capsys):
 
 
 def test_no_plan_exit_1(capsys):
-    assert main(["plan", D, S, P, "--level", "1"]) == 1
+    assert main(["plan", D, S, P, "--level", "1", "--max-level", "1"]) == 1
     assert "no plan" in capsys.readouterr().out
 
 
@@ -95,5 +95,5 @@ def test_solve_fixture_exit_0(capsys):
     assert (
         main(["solve", D, S, P, "--streams", str(PP / "streams.py"), "--level", "3", "--json"]) == 0
     )
-    data = json.loads(capsys.readouterr().out)
+    data = json.loads(capsys.readouterr().out)["results"][0]
     assert data["status"] == "solved" and data["stats"]["streams"]["sample-pose"]["calls"] >= 1

@@ -24,7 +24,7 @@ def test_unknown_problem_name_is_refused():
 
 def test_solve_folder_inspect(capsys):
     code = main(["solve", str(FOLDER), "--problem", "inspect", "--json", "--time-limit", "90"])
-    out = json.loads(capsys.readouterr().out)
+    out = json.loads(capsys.readouterr().out)["results"][0]
     assert code == 0, out["message"]
     names = [step["action"] for step in out["plan"]]
     # Inspect (paper appendix): open the bottom drawer, detect the block, close the drawer.

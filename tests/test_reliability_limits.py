@@ -83,7 +83,7 @@ def test_plans_time_limit_covers_compiling(monkeypatch, capsys, as_json):
     assert time.monotonic() - start < 10
     out = capsys.readouterr().out
     if as_json:
-        report = json.loads(out)
+        report = json.loads(out)["results"][0]
         assert report["status"] == "timeout"
         assert report["message"] == "time limit of 0.5 s reached while compiling"
     else:
@@ -130,7 +130,7 @@ def test_solve_stops_a_stream_that_never_returns(tmp_path, capsys, stream, body,
         f"time limit of 1 s reached while stream '{stream}' was running (it overran the limit)"
     )
     if as_json:
-        report = json.loads(out)
+        report = json.loads(out)["results"][0]
         assert report["status"] == "timeout" and report["message"] == message
     else:
         assert out.strip() == f"no plan: {message}"

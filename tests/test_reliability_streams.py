@@ -67,7 +67,7 @@ def test_numpy_values_print(tmp_path, capsys):
 def test_numpy_values_are_lists_in_json(tmp_path, capsys):
     mod = _module(tmp_path, NUMPY)
     assert main(["solve", D, S, P, "--streams", mod, "--json"]) == 0
-    report = json.loads(capsys.readouterr().out)
+    report = json.loads(capsys.readouterr().out)["results"][0]
     assert report["status"] == "solved"
     values = [v for step in report["plan"] for v in step["values"]]
     assert [-5.0, 0.3] in values  # the trajectory (a numpy array)
