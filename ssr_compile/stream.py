@@ -150,21 +150,43 @@ def module_for_problem(
 ) -> StreamsModule:
     """The streams module ``spec`` made ready for one problem.
 
-    The module's optional ``seed(n)`` is called first; a module whose streams depend on the
-    problem (a simulated world built per task) provides ``for_problem(path, seed)`` returning
-    the :class:`StreamsModule` to use.
+    A module whose streams depend on the seed or the problem provides a factory
+    ``make_module(seed, problem)`` (``problem``: the problem file's path) returning the
+    :class:`StreamsModule` to use -- no module globals.  Older protocols still work:
+    ``for_problem(path, seed)``, and a ``seed(n)`` hook called before the module's
+    ``STREAMS`` are read.
     """
     module = load_streams_module(spec, search=search)
-    seed_fn = getattr(module.module, "seed", None)
-    if callable(seed_fn):
-        seed_fn(seed)
-    factory = getattr(module.module, "for_problem", None)
-    if callable(factory):
-        try:
-            module = factory(problem_path, seed)
-        except (ValueError, OSError) as e:
-            raise StreamError(f"streams module '{spec}' cannot serve {problem_path}: {e}") from None
-    return module
+    make = getattr(module.module, "make_module", None)
+    if callable(make) and _takes(make, "seed", "problem"):
+        factory = lambda: make(seed=seed, problem=str(problem_path))  # noqa: E731
+    elif callable(getattr(module.module, "for_problem", None)):
+        factory = lambda: module.module.for_problem(problem_path, seed)  # noqa: E731
+    else:
+        seed_fn = getattr(module.module, "seed", None)
+        if callable(seed_fn):
+            seed_fn(seed)
+        return module
+    try:
+        made = factory()
+    except (ValueError, OSError) as e:
+        raise StreamError(f"streams module '{spec}' cannot serve {problem_path}: {e}") from None
+    if not isinstance(made, StreamsModule):
+        raise StreamError(
+            f"streams module '{spec}': its factory returned {type(made).__name__}, "
+            "expected a StreamsModule"
+        )
+    return made
+
+
+def _takes(fn: Callable, *names: str) -> bool:
+    """Whether ``fn`` accepts every one of ``names`` as a keyword argument."""
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
+    kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    return all(n in params and params[n].kind in kinds for n in names)
 
 
 def from_module(module, name: str | None = None) -> StreamsModule:

@@ -7,7 +7,7 @@ The planner may ``detect`` the target (cost ``ObsCost``), move a box aside (cost
 ``pick`` the target once its belief is *localized*.
 
 Scene (metres, world frame, z up; a small PyBullet DIRECT scene built on first use, one
-client for the module, disconnected at exit):
+client per streams instance (:func:`make_module`), disconnected at exit):
 
 * camera eye at ``(0, 0, 1.1)``; table top ``z = 0.7`` centred at ``(1.0, 0)``;
 * boxes (half extents 0.05 x 0.07 x 0.12) in front of the target's likely spots at
@@ -31,9 +31,9 @@ so moving the occluder first (``2 + 3.05 = 5.05``) beats detecting where the tar
 
 from __future__ import annotations
 
-import atexit
 import math
 import sys
+import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -51,6 +51,7 @@ from ssr_compile.belief.observation import (
 from ssr_compile.belief.particles import ObservationModel, PoseBelief, Surface, update
 from ssr_compile.belief.visibility import PyBulletCamera
 from ssr_compile.belief.visibility import bodies_at as _bodies_at
+from ssr_compile.stream import StreamInfo, StreamsModule
 
 # ----------------------------------------------------------------- parameters
 
@@ -91,24 +92,6 @@ PRIOR_MASS = {BEHIND_A: 0.45, BEHIND_B: 0.45, VISIBLE_SPOT: 0.10}
 SPOT_SPREAD = 0.03  # particles of a spot lie within +/- 3 cm of it
 PARTICLES_PER_SPOT = 30
 
-# ----------------------------------------------------------------- randomness
-
-_rng = np.random.default_rng(SEED)
-
-
-def reset_rng(seed: int = SEED) -> None:
-    """Restart the module's random generator (same seed, same samples)."""
-    global _rng
-    _rng = np.random.default_rng(seed)
-
-
-seed = reset_rng  # the name `ssr-compile solve --seed N` calls
-
-
-def rng() -> np.random.Generator:
-    return _rng
-
-
 # ----------------------------------------------------------------- the PyBullet scene
 
 
@@ -135,18 +118,6 @@ class Scene:
         if self.client is not None and p.isConnected(self.client):
             p.disconnect(self.client)
         self.client = None
-
-
-_scene: Scene | None = None
-
-
-def scene() -> Scene:
-    """The module's scene, created on first use and disconnected at exit."""
-    global _scene
-    if _scene is None:
-        _scene = Scene()
-        atexit.register(_scene.close)
-    return _scene
 
 
 # ----------------------------------------------------------------- beliefs
@@ -180,60 +151,11 @@ def box_belief(name: str, x: float, y: float, surface: Surface = TABLE) -> PoseB
 # ----------------------------------------------------------------- streams
 
 
-def sample_obs(o: str, pb: PoseBelief) -> Iterator[tuple[Observation]]:
-    """``sample-obs``: observations ``(z, X_i, eps)`` of ``o`` under ``pb`` (paper §V-B).
-
-    As :func:`ssr_compile.belief.observation.sample_obs` (``z = x_i`` for a particle ``x_i``, ``X_i`` the
-    positive-weight particles of its surface within ``DELTA``), but as a finite enumeration of
-    distinct regions, *heaviest first*: ``x_i`` is a particle whose neighbourhood holds the
-    most probability not yet covered by an earlier region (ties broken by the seeded
-    generator).  The Focused solver evaluates one output per level, so the order matters: the
-    planner first sees the observations most likely to succeed (here behind A or B, 0.45
-    each) and the visible spot (0.10) only afterwards.  Ends when every particle is covered.
-    """
-    if o != pb.obj:
-        return
-    positive = pb.weights > 0
-    same = pb.labels[:, None] == pb.labels[None, :]
-    dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
-    near_all = (dist <= DELTA) & same & positive[None, :]
-    covered = ~positive
-    names = pb.surface_names
-    while not covered.all():
-        gain = near_all @ np.where(covered, 0.0, pb.weights)
-        gain[covered] = -1.0
-        best = np.flatnonzero(gain >= gain.max() - 1e-9)
-        i = int(rng().choice(best))
-        members = np.flatnonzero(near_all[i])
-        covered[members] = True
-        region = ObsRegion(str(names[i]), pb.poses[members], pb.poses[i], DELTA, members, pb.digest)
-        yield (Observation(o, pb.poses[i], region, EPS),)
-
-
 def update_belief_fn(o: str, pb1: PoseBelief, obs: Observation) -> tuple[PoseBelief] | None:
     """``update-belief``: the posterior assuming the hypothesised detection (paper §IV-A)."""
     if not o == pb1.obj == obs.obj:
         return None
     return (update_belief(o, pb1, obs, MODEL),)
-
-
-def vis_test(o: str, obs: Observation, o2: str, pb2: PoseBelief) -> bool:
-    """``test-vis`` / ``BVis ?o ?obs ?o2 ?pb2``: ``o2`` under ``pb2`` leaves ``X_i`` visible
-    with probability at least ``1 - eps`` (ray casts, paper §V-B)."""
-    if o == o2 or obs.obj != o or pb2.obj != o2:
-        return True  # an object never occludes itself (the derived predicate excludes it)
-    sc = scene()
-    return bvis(obs, sc.ids[o2], pb2, sc.camera, half_extents=BODIES[o].half_extents)
-
-
-def sample_aside(b: str) -> Iterator[tuple[PoseBelief]]:
-    """Placements of box ``b`` on its aside strip (known poses: point beliefs), endless."""
-    body = BODIES.get(b)
-    if body is None or body.aside is None:
-        return
-    while True:
-        x, y = body.aside.sample_xy(rng(), 1)[0]
-        yield (box_belief(b, float(x), float(y), body.aside),)
 
 
 def is_localized(pb: PoseBelief) -> bool:
@@ -255,14 +177,6 @@ def obscost(o: str, pb: PoseBelief, obs: Observation) -> float | None:
     return cost if math.isfinite(cost) else None
 
 
-STREAMS = {
-    "sample-obs": sample_obs,
-    "update-belief": update_belief_fn,
-    "test-vis": vis_test,
-    "sample-aside": sample_aside,
-    "test-localized": localized_test,
-    "obscost": obscost,
-}
 
 STREAM_INFO = {
     "sample-obs": {"p_success": 1.0, "cost": 0.1},
@@ -285,13 +199,110 @@ VALUES = {
 }
 
 
+class DetectStreams:
+    """The streams of one solve or one episode: their seeded random generator (ties between
+    observation regions, aside placements) and their PyBullet scene (visibility tests), both
+    owned by this object -- no module globals.  :func:`make_module` wraps one."""
+
+    def __init__(self, seed: int = SEED):
+        self.rng = np.random.default_rng(seed)
+        self._scene: Scene | None = None
+
+    def scene(self) -> Scene:
+        """The scene, created on first use and disconnected when this object is collected
+        (or at exit)."""
+        if self._scene is None:
+            self._scene = Scene()
+            weakref.finalize(self, self._scene.close)
+        return self._scene
+
+    def sample_obs(self, o: str, pb: PoseBelief) -> Iterator[tuple[Observation]]:
+        """``sample-obs``: observations ``(z, X_i, eps)`` of ``o`` under ``pb`` (paper §V-B).
+
+        As :func:`ssr_compile.belief.observation.sample_obs` (``z = x_i`` for a particle ``x_i``, ``X_i`` the
+        positive-weight particles of its surface within ``DELTA``), but as a finite enumeration of
+        distinct regions, *heaviest first*: ``x_i`` is a particle whose neighbourhood holds the
+        most probability not yet covered by an earlier region (ties broken by the seeded
+        generator).  The Focused solver evaluates one output per level, so the order matters: the
+        planner first sees the observations most likely to succeed (here behind A or B, 0.45
+        each) and the visible spot (0.10) only afterwards.  Ends when every particle is covered.
+        """
+        if o != pb.obj:
+            return
+        positive = pb.weights > 0
+        same = pb.labels[:, None] == pb.labels[None, :]
+        dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
+        near_all = (dist <= DELTA) & same & positive[None, :]
+        covered = ~positive
+        names = pb.surface_names
+        while not covered.all():
+            gain = near_all @ np.where(covered, 0.0, pb.weights)
+            gain[covered] = -1.0
+            best = np.flatnonzero(gain >= gain.max() - 1e-9)
+            i = int(self.rng.choice(best))
+            members = np.flatnonzero(near_all[i])
+            covered[members] = True
+            region = ObsRegion(str(names[i]), pb.poses[members], pb.poses[i], DELTA, members, pb.digest)
+            yield (Observation(o, pb.poses[i], region, EPS),)
+
+
+    def vis_test(self, o: str, obs: Observation, o2: str, pb2: PoseBelief) -> bool:
+        """``test-vis`` / ``BVis ?o ?obs ?o2 ?pb2``: ``o2`` under ``pb2`` leaves ``X_i`` visible
+        with probability at least ``1 - eps`` (ray casts, paper §V-B)."""
+        if o == o2 or obs.obj != o or pb2.obj != o2:
+            return True  # an object never occludes itself (the derived predicate excludes it)
+        sc = self.scene()
+        return bvis(obs, sc.ids[o2], pb2, sc.camera, half_extents=BODIES[o].half_extents)
+
+
+    def sample_aside(self, b: str) -> Iterator[tuple[PoseBelief]]:
+        """Placements of box ``b`` on its aside strip (known poses: point beliefs), endless."""
+        body = BODIES.get(b)
+        if body is None or body.aside is None:
+            return
+        while True:
+            x, y = body.aside.sample_xy(self.rng, 1)[0]
+            yield (box_belief(b, float(x), float(y), body.aside),)
+
+    def streams(self) -> dict:
+        return {
+            "sample-obs": self.sample_obs,
+            "update-belief": update_belief_fn,
+            "test-vis": self.vis_test,
+            "sample-aside": self.sample_aside,
+            "test-localized": localized_test,
+            "obscost": obscost,
+        }
+
+    def module(self, values: dict | None = None) -> StreamsModule:
+        """A :class:`StreamsModule` over these streams (``values``: the objects' Python
+        values, :data:`VALUES` by default)."""
+        return StreamsModule(
+            "ssr_compile.streams.belief_detect",
+            self.streams(),
+            {k: StreamInfo.of(v, k) for k, v in STREAM_INFO.items()},
+            dict(VALUES if values is None else values),
+            sys.modules[__name__],
+        )
+
+
+def make_module(seed: int = SEED, problem: str | None = None) -> StreamsModule:
+    """The streams with their own generator seeded by ``seed`` (``ssr-compile solve --seed
+    N``) and their own scene.  Both problems' objects are in :data:`VALUES`, so ``problem``
+    (the problem file's path) changes nothing."""
+    return DetectStreams(seed).module()
+
+
+# The module's own STREAMS (for from_module and `import`): a default instance with seed 0.
+STREAMS = DetectStreams(SEED).streams()
+
+
 # ----------------------------------------------------------------- the closed loop (Algorithm 1)
 
 GRASP_TOLERANCE = 0.02  # a pick succeeds when the belief's estimate is this close to the truth
 
 
-def _box_poses(beliefs: dict[str, PoseBelief]) -> dict[int, tuple]:
-    sc = scene()
+def _box_poses(sc: Scene, beliefs: dict[str, PoseBelief]) -> dict[int, tuple]:
     return {sc.ids[b]: tuple(beliefs[b].poses[0]) for b in ("boxa", "boxb")}
 
 
@@ -355,6 +366,7 @@ class DetectAgent:
     def __init__(self, domain, streams, seed: int, boxes: dict[str, tuple[float, float]]):
         self.domain, self.streams = domain, streams
         self.rng = np.random.default_rng([seed, 13])
+        self.detect = DetectStreams(seed)  # the planner's streams, one generator per episode
         self.beliefs = {"target": prior_belief()}
         self.beliefs.update({b: box_belief(b, *xy) for b, xy in boxes.items()})
         self.names = {o: f"pb-{o}" for o in self.beliefs}
@@ -373,8 +385,8 @@ class DetectAgent:
             return
         if observation["action"] == "detect":
             pb = self.beliefs["target"]
-            sc = scene()
-            with _bodies_at(sc.client, _box_poses(self.beliefs)):
+            sc = self.detect.scene()
+            with _bodies_at(sc.client, _box_poses(sc, self.beliefs)):
                 mask = visibility_mask(
                     pb, sc.camera, BODIES["target"].half_extents, ignore=[sc.ids["target"]]
                 )
@@ -423,11 +435,7 @@ class DetectAgent:
             atom("holding", "target"),
             S.Metric("minimize", S.FuncTerm("total-cost")),
         )
-        from ssr_compile.stream import from_module
-
-        module = from_module(sys.modules[__name__], "ssr_compile.streams.belief_detect")
-        module.values = {self.names[o]: b for o, b in self.beliefs.items()}
-        return problem, module
+        return problem, self.detect.module({self.names[o]: b for o, b in self.beliefs.items()})
 
     def is_constant(self, name: str) -> bool:
         return name in ("target", "boxa", "boxb")
@@ -459,7 +467,6 @@ def make_episode(problem: str | None = None, seed: int = 0):
     key = (problem or "occluded").removeprefix("problem-").removesuffix(".pddl")
     if key not in PROBLEM_BOXES:
         raise ValueError(f"no problem '{problem}'; expected one of {', '.join(PROBLEM_BOXES)}")
-    reset_rng(seed)
     ex = load_example("belief-detect")
     boxes = PROBLEM_BOXES[key]
     return Episode(DetectWorld(seed, dict(boxes)), DetectAgent(ex.domain, ex.streams, seed, dict(boxes)), f"belief-detect/{key}")

@@ -43,7 +43,9 @@ ignored).  :func:`check_plan` validates a plan on the geometric state, independe
 
 from __future__ import annotations
 
+import functools
 import math
+import sys
 import zlib
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any, NamedTuple
@@ -51,7 +53,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ssr_compile import syntax as S
-from ssr_compile.stream import StreamInfo
+from ssr_compile.stream import StreamInfo, StreamsModule
 
 
 class Block(NamedTuple):
@@ -82,7 +84,6 @@ class Traj(NamedTuple):
     path: tuple[Conf, ...]
 
 
-SEED = 0  # the base seed of every sampler (each stream instance mixes in its inputs)
 SAFE_HEIGHT = 4.0  # the gripper travels across at this height, above every block
 REACH = (-6.0, 14.0)  # the gripper's reachable x interval
 GRASPS = (0.2, 0.4)  # vertical offsets above a block's top
@@ -105,23 +106,18 @@ VALUES: dict[str, Any] = {
 # ---------------------------------------------------------------- streams
 
 
-def seed(n: int) -> None:
-    """Set the base seed of the samplers (``ssr-compile solve --seed N`` calls this)."""
-    global SEED
-    SEED = int(n)
+def _rng(seed: int, *inputs: Any) -> np.random.Generator:
+    """A generator seeded from ``seed`` and the inputs' text (stable across runs)."""
+    return np.random.default_rng([int(seed), zlib.crc32(repr(inputs).encode())])
 
 
-def _rng(*inputs: Any) -> np.random.Generator:
-    """A generator seeded from :data:`SEED` and the inputs' text (stable across runs)."""
-    return np.random.default_rng([SEED, zlib.crc32(repr(inputs).encode())])
-
-
-def sample_placement(block: Block, region: Region) -> Iterator[tuple[Pose]]:
-    """Endless uniform poses of ``block`` inside ``region`` (nothing if it does not fit)."""
+def sample_placement(block: Block, region: Region, *, seed: int = 0) -> Iterator[tuple[Pose]]:
+    """Endless uniform poses of ``block`` inside ``region`` (nothing if it does not fit);
+    ``seed`` is the base seed of the sampler (:func:`make_module` binds it)."""
     lo, hi = region.lo + block.width / 2, region.hi - block.width / 2
     if lo > hi + TOL:
         return
-    rng = _rng(block, region)
+    rng = _rng(seed, block, region)
     while True:
         x = round(float(rng.uniform(lo, hi)), 3)
         yield (Pose(min(max(x, lo), hi)),)
@@ -185,6 +181,16 @@ STREAM_INFO: dict[str, StreamInfo] = {
     # A lower bound of every real distance (the gripper climbs to SAFE_HEIGHT and back).
     "distance": StreamInfo(optimistic_value=1.0, cost=0.1),
 }
+
+
+
+def make_module(seed: int = 0, problem: str | None = None) -> StreamsModule:
+    """The streams with their samplers seeded by ``seed`` (``ssr-compile solve --seed N``).
+    Every problem of the example uses the objects of :data:`VALUES`, so ``problem`` (the
+    problem file's path) changes nothing."""
+    streams = dict(STREAMS)
+    streams["sample-placement"] = functools.partial(sample_placement, seed=seed)
+    return StreamsModule(__name__, streams, dict(STREAM_INFO), dict(VALUES), sys.modules[__name__])
 
 
 # ---------------------------------------------------------------- plan checking

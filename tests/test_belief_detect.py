@@ -22,7 +22,7 @@ from ssr_compile.compile.pipeline import FullCapabilities, compile_problem
 from ssr_compile.parse import parse_file, parse_text
 from ssr_compile.preimage import PlanInvalid, plan_preimage
 from ssr_compile.printer import to_text
-from ssr_compile.stream import Generator, ValueTable, call_function, call_test, from_module
+from ssr_compile.stream import Generator, ValueTable, call_function, call_test
 
 FOLDER = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "belief-detect"
 FILES = ["domain.pddl", "stream.pddl", "problem-occluded.pddl", "problem-clear.pddl"]
@@ -53,9 +53,8 @@ def prior():
 @pytest.fixture(scope="module")
 def observations(prior):
     """Every region of the prior, keyed 'a' (behind box A), 'b' (behind B), 'v' (visible)."""
-    bd.reset_rng()
     out = {}
-    for (obs,) in bd.sample_obs("target", prior):
+    for (obs,) in bd.DetectStreams(0).sample_obs("target", prior):
         y = obs.z[1]
         key = (
             "a"
@@ -74,8 +73,7 @@ def test_prior_and_sample_obs(prior, observations):
     assert sorted(observations) == ["a", "b", "v"]  # three distinct regions, then the end
     masses = {k: o.region.mass(prior) for k, o in observations.items()}
     assert masses == {"a": pytest.approx(0.45), "b": pytest.approx(0.45), "v": pytest.approx(0.1)}
-    bd.reset_rng()
-    again = [o for (o,) in bd.sample_obs("target", prior)]
+    again = [o for (o,) in bd.make_module(0).streams["sample-obs"]("target", prior)]
     assert set(again) == set(observations.values())  # seeded: same samples
 
 
@@ -93,16 +91,17 @@ def test_update_belief_keeps_weight_one_and_localizes(prior, observations):
 def test_test_vis_occluding_box_and_moved_aside(observations):
     a, b, v = observations["a"], observations["b"], observations["v"]
     pba, pbb = bd.VALUES["pb-boxa"], bd.VALUES["pb-boxb"]
-    assert not bd.vis_test("target", a, "boxa", pba)  # A hides the region behind it
-    assert bd.vis_test("target", a, "boxb", pbb)
-    assert not bd.vis_test("target", b, "boxb", pbb)
-    assert bd.vis_test("target", v, "boxa", pba) and bd.vis_test("target", v, "boxb", pbb)
-    bd.reset_rng()
-    (aside,) = next(bd.sample_aside("boxa"))
+    streams = bd.DetectStreams(0)
+    vis_test = streams.vis_test
+    assert not vis_test("target", a, "boxa", pba)  # A hides the region behind it
+    assert vis_test("target", a, "boxb", pbb)
+    assert not vis_test("target", b, "boxb", pbb)
+    assert vis_test("target", v, "boxa", pba) and vis_test("target", v, "boxb", pbb)
+    (aside,) = next(streams.sample_aside("boxa"))
     assert aside.surface_names[0] == "aside-a" and len(aside) == 1
-    assert bd.vis_test("target", a, "boxa", aside)  # moved aside: no longer in the way
-    assert bd.vis_test("target", a, "boxa", bd.VALUES["pb-boxa-clear"])
-    assert bd.vis_test("target", b, "boxb", bd.VALUES["pb-boxb-clear"])
+    assert vis_test("target", a, "boxa", aside)  # moved aside: no longer in the way
+    assert vis_test("target", a, "boxa", bd.VALUES["pb-boxa-clear"])
+    assert vis_test("target", b, "boxb", bd.VALUES["pb-boxb-clear"])
 
 
 def test_obscost_is_higher_for_the_unlikely_region(prior, observations):
@@ -163,11 +162,10 @@ def evaluate(domain, streams, problem, module, rounds: int = 3, per_instance: in
 def grounded():
     """Both problems with every stream evaluated for real (no optimistic fact left)."""
     domain, streams = load("domain.pddl"), load("stream.pddl")
-    module = from_module(bd)
     out = {}
     for which in ("occluded", "clear"):
         problem = load(f"problem-{which}.pddl")
-        bd.reset_rng()
+        module = bd.make_module(0)
         results, done, values, table = evaluate(domain, streams, problem, module)
         declared = {o.name for o in problem.objects}
         new = sorted({n for r in results for n in r.outputs} - declared)
@@ -371,13 +369,12 @@ def test_costs_make_the_trade_off(grounded):
 def solve_example(which: str, planner: str = "fd:opt"):
     from ssr_compile.focused import solve
 
-    bd.reset_rng()
     problem = load(f"problem-{which}.pddl")
     return solve(
         load("domain.pddl"),
         load("stream.pddl"),
         problem,
-        from_module(bd),
+        bd.make_module(0),
         planner=planner,
         initial_level=3,
         time_limit=30,

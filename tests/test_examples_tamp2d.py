@@ -208,11 +208,10 @@ def test_streams_behave_as_their_info_says():
     assert all(rgoal.lo + 0.5 <= p.x <= rgoal.hi - 0.5 for p in poses)
     again = T.sample_placement(b0, rgoal)
     assert [next(again)[0] for _ in range(50)] == poses
-    try:
-        T.seed(1)
-        assert next(T.sample_placement(b0, rgoal))[0] != poses[0]
-    finally:
-        T.seed(0)
+    assert next(T.sample_placement(b0, rgoal, seed=1))[0] != poses[0]
+    seeded = T.make_module(1).streams["sample-placement"]
+    assert next(seeded(b0, rgoal))[0] == next(T.sample_placement(b0, rgoal, seed=1))[0]
+    assert next(T.make_module(0).streams["sample-placement"](b0, rgoal))[0] == poses[0]
     # ... and every pose of b0 in the goal region overlaps b1 at p1 (problem-blocked).
     assert not any(T.test_cfree(b0, p, b1, T.VALUES["p1"]) for p in poses)
     # ... while b1's placements on the table sometimes overlap b0 at p0, sometimes not.
