@@ -22,6 +22,9 @@ The policy never reads the true state: success is judged afterwards by
 :meth:`Environment.goal_holds` on the environment's true state.
 """
 
+# The cycle's closures (attempt, log) are called within their own iteration only.
+# ruff: noqa: B023
+
 from __future__ import annotations
 
 import math
@@ -370,10 +373,35 @@ def run_policy(
                     name = overrunning_stream(e)
                     raise StreamOverrun(name, time.monotonic() - began) from None
                 planning += sol.stats.total_time
-                spent[key] += sol.stats.total_time  # noqa: B023 (called within the iteration)
+                spent[key] += sol.stats.total_time
                 streams_called += sum(s.calls for s in sol.stats.streams.values())
                 planners_called += sol.stats.planner_calls
                 return sol
+
+            def log(action, sol, **timings) -> None:
+                """Record this cycle (the policy's own time is what is left of it)."""
+                record = _record(
+                    index,
+                    action,
+                    constrained,
+                    spent,
+                    streams_called,
+                    planners_called,
+                    sol,
+                    agent,
+                    cycle_start,
+                )
+                for key, value in timings.items():
+                    setattr(record, key, value)
+                if timings:
+                    total = time.monotonic() - cycle_start - (timings["comparison_time"] or 0.0)
+                    record.overhead_time = max(
+                        total - record.planning_time - record.execution_time - record.update_time,
+                        0.0,
+                    )
+                cycles.append(record)
+                if on_cycle:
+                    on_cycle(record)
 
             if settings.constraints and state.tail:
                 limit = min(settings.constrained_time, settings.budget - planning)
@@ -411,62 +439,20 @@ def run_policy(
             if solution is None:
                 remaining = settings.budget - planning
                 if remaining <= 0:
-                    cycles.append(
-                        _record(
-                            index,
-                            None,
-                            constrained,
-                            spent,
-                            streams_called,
-                            planners_called,
-                            None,
-                            agent,
-                            cycle_start,
-                        )
-                    )
-                    if on_cycle:
-                        on_cycle(cycles[-1])
+                    log(None, None)
                     return finish(False, f"planning budget of {settings.budget:g} s exhausted")
                 solution = attempt(
                     problem, module, min(settings.unconstrained_time, remaining), "u"
                 )
             if not solution.solved:
-                cycles.append(
-                    _record(
-                        index,
-                        None,
-                        constrained,
-                        spent,
-                        streams_called,
-                        planners_called,
-                        solution,
-                        agent,
-                        cycle_start,
-                    )
-                )
-                if on_cycle:
-                    on_cycle(cycles[-1])
+                log(None, solution)
                 why = (
                     "planning budget exhausted" if planning >= settings.budget else solution.message
                 )
                 return finish(False, f"no plan: {why}")
             plan = solution.plan or []
             if not plan:
-                cycles.append(
-                    _record(
-                        index,
-                        None,
-                        constrained,
-                        spent,
-                        streams_called,
-                        planners_called,
-                        solution,
-                        agent,
-                        cycle_start,
-                    )
-                )
-                if on_cycle:
-                    on_cycle(cycles[-1])
+                log(None, solution)
                 return finish(True, "goal belief reached")
             # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
             constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
@@ -475,7 +461,7 @@ def run_policy(
             kept_facts, kept_values = constant_facts(
                 solution,
                 problem,
-                lambda n: n in constants,  # noqa: B023
+                lambda n: n in constants,
             )
             tail = [(s.name, tuple(s.args)) for s in plan[1:]]
             step = plan[0]
@@ -494,27 +480,13 @@ def run_policy(
                 kept_facts,
                 kept_values,
             )
-            record = _record(
-                index,
+            log(
                 str(step),
-                constrained,
-                spent,
-                streams_called,
-                planners_called,
                 solution,
-                agent,
-                cycle_start,
+                execution_time=after_exec - before_exec,
+                update_time=after_update - after_exec,
+                comparison_time=comparison,
             )
-            record.execution_time = after_exec - before_exec
-            record.comparison_time = comparison
-            record.update_time = after_update - after_exec
-            total = time.monotonic() - cycle_start - (comparison or 0.0)
-            record.overhead_time = max(
-                total - record.planning_time - record.execution_time - record.update_time, 0.0
-            )
-            cycles.append(record)
-            if on_cycle:
-                on_cycle(record)
     except StreamOverrun as e:
         planning += e.seconds
         return finish(False, str(e))
