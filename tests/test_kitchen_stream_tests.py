@@ -1,0 +1,81 @@
+"""The kitchen's test streams decide what the paper's derived predicates say: ``test-vis``
+(BVis, so BOccluded) and ``test-cfree`` (collision-free placements, so Unsafe).  Each is asked
+once where the answer must be yes and once where it must be no."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from ssr_compile.sim.geometry import yaw_of
+from ssr_compile.sim.perception import is_visible
+from ssr_compile.sim.tasks import make_task
+from ssr_compile.streams.kitchen_module import make_module
+
+from ssr_compile.belief.particles import PoseBelief
+
+
+@pytest.fixture(scope="module")
+def cook():
+    """A Cook task where a box hides the block from the camera at the start."""
+    for seed in range(10):
+        task = make_task("cook", seed)
+        if not is_visible(task.world, "block"):
+            module = make_module(task, np.random.default_rng(0))
+            yield task, module
+            task.world.close()
+            return
+        task.world.close()
+    pytest.fail("no Cook seed in 0-9 with the block hidden")
+
+
+def _point(task, name: str, xy=None) -> PoseBelief:
+    surface = task.prior_surfaces()[name][0][0]
+    pos, quat = task.world.object_pose(name)
+    x, y = (pos[0], pos[1]) if xy is None else xy
+    return PoseBelief.point(name, surface, (x, y, pos[2], yaw_of(quat)))
+
+
+def _observation(task, module):
+    block = _point(task, "block")
+    (obs,) = next(iter(module.streams["sample-obs"]("block", block, "counter")))
+    return obs
+
+
+def _occluder(task, module, obs) -> str:
+    boxes = ("cracker_box", "sugar_box")
+    hiding = [b for b in boxes if not module.streams["test-vis"]("block", obs, b, _point(task, b))]
+    return hiding[0] if hiding else ""
+
+
+def test_vis_fails_for_the_box_that_hides_the_block_and_holds_once_it_is_moved(cook):
+    task, module = cook
+    obs = _observation(task, module)
+    occluder = _occluder(task, module, obs)
+    assert occluder, "the box hiding the block must make BVis false"
+    # the same box at the far corner of the counter, off the camera's rays to the block
+    surface = task.prior_surfaces()[occluder][0][0]
+    corners = [
+        (
+            surface.center[0] + sx * 0.8 * surface.half_extents[0],
+            surface.center[1] + sy * 0.8 * surface.half_extents[1],
+        )
+        for sx in (-1, 1)
+        for sy in (-1, 1)
+    ]
+    answers = [
+        module.streams["test-vis"]("block", obs, occluder, _point(task, occluder, xy))
+        for xy in corners
+    ]
+    assert any(answers)  # moved away, the same box no longer hides the block
+
+
+def test_cfree_refuses_a_placement_on_top_of_another_object(cook):
+    task, module = cook
+    sugar = _point(task, "sugar_box")
+    pos = sugar.poses[0]
+    on_it = _point(task, "block", (pos[0], pos[1]))
+    assert module.streams["test-cfree"]("block", on_it, "sugar_box", sugar) is False
+    far = _point(task, "block", (pos[0], pos[1] + 0.5))
+    assert module.streams["test-cfree"]("block", far, "sugar_box", sugar) is True
+    # an object never collides with itself
+    assert module.streams["test-cfree"]("block", on_it, "block", on_it) is True
