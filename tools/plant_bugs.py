@@ -14,6 +14,16 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 MUTANTS = {
+    "kitchen: test-vis always true": (
+        "streams/kitchen_module.py",
+        "            return self._visible_despite(obs, self.world.objects[o2], pb2)\n",
+        "            return True\n",
+    ),
+    "kitchen: test-cfree inverted": (
+        "streams/kitchen_module.py",
+        "        return float(pb2.weights[same & (d < r)].sum()) <= EPS\n",
+        "        return float(pb2.weights[same & (d < r)].sum()) > EPS\n",
+    ),
     "derived: only the first axiom inlined": (
         "ssr_compile/compile/derived.py",
         "        for ax in axioms:\n",
@@ -85,6 +95,7 @@ tests = sys.argv[1:] or [
     "tests/test_belief_thresholds.py",
     "tests/test_derived_semantics.py",
     "tests/test_costs_once.py",
+    "tests/test_kitchen_stream_tests.py",
 ]
 ROOT = Path(tempfile.mkdtemp(prefix="ssr-plant-"))
 archive = subprocess.run(["git", "archive", "HEAD"], cwd=REPO, capture_output=True, check=True)
