@@ -107,6 +107,16 @@ class StreamsModule:
         for name, fn in self.streams.items():
             if not callable(fn):
                 raise StreamError(f"STREAMS['{name}'] in '{self.name}' is not callable")
+        known = set(declared) | set(self.streams)
+        unknown = [k for k in self.info if k not in known]
+        if unknown:  # a misspelled name would otherwise be silently ignored
+            raise StreamError(
+                f"STREAM_INFO in '{self.name}' names {', '.join(repr(k) for k in unknown)}, "
+                f"which {'is' if len(unknown) == 1 else 'are'} neither declared in "
+                f"{filename or 'the stream file'} nor in its STREAMS (the names that exist: "
+                f"{', '.join(sorted(known)) or 'none'})",
+                file=filename,
+            )
 
 
 def load_streams_module(spec: str, *, search: list[Path] | None = None) -> StreamsModule:
@@ -201,6 +211,14 @@ def from_module(module, name: str | None = None) -> StreamsModule:
     values = getattr(module, "VALUES", {}) or {}
     if not isinstance(values, Mapping):
         raise StreamError(f"VALUES in '{name}' must be a dict")
+    known = {str(k).lower() for k in streams}
+    unknown = [str(k) for k in info_raw if str(k).lower() not in known]
+    if unknown:  # a misspelled name would otherwise be silently ignored
+        raise StreamError(
+            f"STREAM_INFO in '{name}' names {', '.join(repr(k) for k in unknown)}, which "
+            f"{'is' if len(unknown) == 1 else 'are'} not in its STREAMS (the names that exist: "
+            f"{', '.join(sorted(known)) or 'none'})"
+        )
     return StreamsModule(
         name,
         {k.lower(): v for k, v in streams.items()},
