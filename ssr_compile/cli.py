@@ -1,6 +1,6 @@
 """The ``ssr-compile`` command line.
 
-Exit codes (DESIGN §7): 0 success, 1 no plan within the limits, 2 bad input (the message names
+Exit codes (README, "Commands"): 0 success, 1 no plan within the limits, 2 bad input (the message names
 file:line:col; never a traceback).  Subcommands register themselves in ``COMMANDS``; heavy
 imports (planners, PyBullet) happen inside the commands that need them, so ``check`` and
 ``fmt`` start fast.
