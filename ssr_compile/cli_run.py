@@ -129,18 +129,29 @@ def run(args: argparse.Namespace) -> int:
             log_file = open(log_path, "w", encoding="utf-8")  # noqa: SIM115
         except OSError as e:
             raise SSRError(f"--log {args.log}: {e.strerror}", file=args.log) from None
-    options = {"gif": args.gif} if args.gif else {}
+    gif = Path(args.gif) if args.gif else None
+    if gif is not None:
+        if gif.exists() and not gif.is_file():
+            raise SSRError(f"--gif {args.gif}: not a regular file", file=args.gif)
+        if not gif.parent.is_dir():
+            raise SSRError(f"--gif {args.gif}: no folder {gif.parent}", file=args.gif)
     try:
-        episode = factory(problem, args.seed, **options)
+        episode = factory(problem, args.seed)
     except TypeError as e:
-        if options:
-            raise SSRError(f"--gif is not supported by the '{example.name}' environment") from None
         raise SSRError(f"the environment factory of '{example.name}' failed: {e}") from None
     except ValueError as e:
         raise SSRError(f"{example.name}: {e}") from None
+    frames: list = []
+    if gif is not None:
+        if getattr(episode, "render", None) is None:
+            episode.close()
+            raise SSRError(f"--gif: the '{example.name}' environment draws no pictures")
+        frames.append(episode.render(f"{example.name} {problem or ''} seed {args.seed}: start"))
     say = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
 
     def on_cycle(cycle) -> None:
+        if gif is not None and cycle.action is not None:
+            frames.append(episode.render(f"cycle {cycle.index}: {cycle.action}"))
         if not args.json:
             print(cycle.line(), flush=True)
         if log_file is not None:
@@ -155,6 +166,10 @@ def run(args: argparse.Namespace) -> int:
         )
     try:
         result = run_policy(episode, settings, on_cycle=on_cycle, progress=say)
+        if gif is not None:
+            truth = "goal holds" if result.success else "goal does NOT hold"
+            frames.append(episode.render(f"end: {result.reason}; {truth} in the true world"))
+            _write_gif(gif, frames)
     finally:
         episode.close()
         if log_file is not None:
@@ -180,6 +195,28 @@ def run(args: argparse.Namespace) -> int:
             f"fell back {result.fallbacks}), wall {result.wall_time:.1f} s"
         )
     return 0 if result.success else 1
+
+
+def _write_gif(path: Path, frames: list) -> None:
+    """An animated GIF of the frames (1.2 s each, the last held 3 s), written atomically."""
+    import os
+    import tempfile
+
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames]
+    durations = [1200] * (len(images) - 1) + [3000]
+    fd, tmp = tempfile.mkstemp(prefix=".ssr-gif-", suffix=".gif", dir=path.parent)
+    os.close(fd)
+    try:
+        images[0].save(
+            tmp, save_all=True, append_images=images[1:], duration=durations, loop=0
+        )
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    print(f"wrote {path} ({len(images)} frames)")
 
 
 register(

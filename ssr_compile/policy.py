@@ -114,11 +114,15 @@ class Agent(Protocol):
 
 @dataclass
 class Episode:
-    """An environment and the agent that acts in it (what an example's factory returns)."""
+    """An environment and the agent that acts in it (what an example's factory returns).
+
+    ``render`` (optional): a picture of the episode now, ``render(caption) -> RGB array``, the
+    frames of ``ssr-compile run --gif``."""
 
     environment: Environment
     agent: Agent
     name: str = ""
+    render: Callable[[str], Any] | None = None
 
     def close(self) -> None:
         self.environment.close()
