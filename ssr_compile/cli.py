@@ -15,13 +15,13 @@ import signal
 import sys
 import tempfile
 import threading
-import time
 from collections.abc import Callable
 from pathlib import Path
 
 from . import __version__
 from . import syntax as S
 from .errors import Failure, SSRError, TimeLimitReached
+from .limits import time_limit  # noqa: F401 (cli.time_limit: the commands bound themselves)
 
 COMMANDS: dict[
     str, tuple[Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int], str]
@@ -262,48 +262,6 @@ def _validate_numbers(p: argparse.ArgumentParser) -> None:
         check = NUMERIC_OPTIONS.get(action.dest)
         if check is not None and action.type in (int, float, None) and action.option_strings:
             action.type = check
-
-
-class time_limit:
-    """Bound a block of the main thread by ``limit`` seconds: when they pass, raise
-    :class:`TimeLimitReached` wherever the block is (compiling, calling a stream, waiting for
-    a planner, whose processes are then killed as on Ctrl-C).  No-op outside the main thread or
-    without ``setitimer``; ``limit`` None or infinite: no bound."""
-
-    def __init__(self, limit: float | None):
-        self.limit = limit
-        self.active = False
-
-    def __enter__(self):
-        if (
-            self.limit is None
-            or not math.isfinite(self.limit)
-            or not hasattr(signal, "setitimer")
-            or threading.current_thread() is not threading.main_thread()
-        ):
-            return self
-        self.saved = signal.signal(signal.SIGALRM, self._fire)
-        outer = signal.setitimer(signal.ITIMER_REAL, max(self.limit, 0.001))[0]
-        self.outer_deadline = time.monotonic() + outer if outer > 0 else None
-        if outer > 0 and outer < self.limit:  # an enclosing limit that passes first
-            signal.setitimer(signal.ITIMER_REAL, outer)
-        self.active = True
-        return self
-
-    def _fire(self, signum, frame):
-        from .errors import TimeLimitReached
-
-        raise TimeLimitReached(self.limit)
-
-    def __exit__(self, *exc):
-        if self.active:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, self.saved)
-            if self.outer_deadline is not None:  # an enclosing limit: let it run on
-                left = self.outer_deadline - time.monotonic()
-                signal.setitimer(signal.ITIMER_REAL, max(left, 0.001))
-            self.active = False
-        return False
 
 
 # ---------------------------------------------------------------- check

@@ -363,21 +363,10 @@ _GRACE = 1.0
 
 
 def _where(e: BaseException) -> str:
-    """Which stream was running when the time limit passed (from the traceback), if any."""
-    from . import stream as stream_module
+    """Which stream was running when the time limit passed, as a phrase for the message."""
+    from .limits import overrunning_stream
 
-    name = None
-    tb = e.__traceback__
-    while tb is not None:
-        frame = tb.tb_frame
-        if frame.f_code.co_filename == stream_module.__file__:
-            local = frame.f_locals
-            found = local.get("name")
-            if found is None and isinstance(local.get("self"), stream_module.Generator):
-                found = local["self"].name
-            if isinstance(found, str):
-                name = found
-        tb = tb.tb_next
+    name = overrunning_stream(e)
     return f" while stream '{name}' was running (it overran the limit)" if name else ""
 
 
