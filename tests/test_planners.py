@@ -19,7 +19,7 @@ from ssr_compile.planners import (
     describe_planners,
     get_planner,
 )
-from ssr_compile.planners.rename import rename_task
+from ssr_compile.compile.rename import rename_task
 from ssr_compile.planners.validate import validate_plan
 
 FIXTURES = Path(__file__).parent / "fixtures" / "planners"

@@ -23,11 +23,11 @@ from dataclasses import dataclass, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
-from ..planners.rename import Renaming, rename_task
 from .costs import compile_costs
 from .derived import compile_away, normalise_axiom_bodies
 from .formulas import TooLarge, conj, dnf, has, map_atoms, nnf, substitute
 from .ground import Grounded, ground
+from .rename import Renaming, rename_task
 
 Plan = list[tuple[str, tuple[str, ...]]]
 MAX_EXPANSION = 200_000

@@ -17,24 +17,13 @@ import atexit
 import importlib.util
 import math
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
-from ..printer import to_text
 from ..syntax import Domain, Problem
 from . import proc
-from .base import (
-    ERROR,
-    TIMEOUT,
-    UNSOLVABLE,
-    Capabilities,
-    Clock,
-    PlanResult,
-    describe_variants,
-)
-from .costs import fractional_costs, priced
-from .features import unsupported
+from .base import ERROR, TIMEOUT, UNSOLVABLE, Capabilities, describe_variants
+from .costs import fractional_costs
+from .external import ExternalPlanner, Job, Stop, log_tail, log_text, read_plan_file
 
 # Search configurations; ``{bound}`` receives ``,bound=N`` when a cost bound is given.
 # "default" is cost-aware (LAMA's weighted-A* stage: ff + landmarks with costs plus one) and
@@ -117,24 +106,9 @@ _TRANSLATOR = proc.ForkedWorker(_translate)
 atexit.register(_TRANSLATOR.close)
 
 
-def _log_tail(path: str, lines: int = 6) -> str:
-    try:
-        text = Path(path).read_text(errors="replace").strip().splitlines()
-    except OSError:
-        return ""
-    return " | ".join(line.strip() for line in text[-lines:] if line.strip())
-
-
 def read_plan(path: str) -> list[tuple[str, tuple[str, ...]]]:
     """Ground actions of a Fast Downward plan file (``(name arg ...)`` per line)."""
-    actions = []
-    for line in Path(path).read_text().splitlines():
-        line = line.strip()
-        if not line or line.startswith(";"):
-            continue
-        name, *args = line.strip("()").lower().split()
-        actions.append((name, tuple(args)))
-    return actions
+    return read_plan_file(path) or []
 
 
 def _last_plan(path: str) -> str | None:
@@ -145,9 +119,11 @@ def _last_plan(path: str) -> str | None:
     return str(max(numbered, key=lambda p: int(p.suffix[1:]))) if numbered else None
 
 
-class FastDownward:
+class FastDownward(ExternalPlanner):
     """The ``fd`` backend.  ``search`` is a key of :data:`SEARCHES` or a raw ``--search``
     string; ``keep_files`` leaves the temporary directory in place (its path in the message)."""
+
+    plain_names = False  # the translator reads any PDDL name, in separate namespaces
 
     def __init__(self, search: str = "default", *, keep_files: bool = False):
         self.search = search
@@ -177,84 +153,63 @@ class FastDownward:
             raise ValueError("a raw search string needs a {bound} slot to take a cost bound")
         return template.replace("{bound}", bound)
 
-    def solve(
-        self,
-        domain: Domain,
-        problem: Problem,
-        time_limit: float = 60.0,
-        cost_bound: float | None = None,
-    ) -> PlanResult:
-        clock = Clock(time_limit)
-        tmp = ""
+    def before(self, domain: Domain, problem: Problem) -> None:
         self.last_operators = None
 
-        def result(status, message="", actions=None, cost=None):
-            if self.keep_files and tmp:
-                message = f"{message} [files in {tmp}]".strip()
-            return PlanResult(status, actions, cost, clock.elapsed(), self.name, message)
-
-        missing = unsupported(self.capabilities, domain, problem)
-        if missing:
-            return result(ERROR, f"{self.name} does not support " + ", ".join(missing))
+    def refuse(self, domain: Domain, problem: Problem) -> str | None:
+        refusal = super().refuse(domain, problem)
+        if refusal:
+            return refusal
         fractional = fractional_costs(domain, problem) if problem.metric is not None else []
         if fractional:
-            return result(
+            return "Fast Downward needs integer costs (scale and round them first): " + ", ".join(
+                fractional[:3]
+            )
+        return None
+
+    def run(self, job: Job) -> list | None:
+        """The translator in the forked worker, then the search binary on its SAS file."""
+        sas, log = job.file("output.sas"), job.file("translate.log")
+        status, info = _TRANSLATOR.call(
+            (job.domain, job.problem, sas), timeout=job.clock.remaining(), log_path=log
+        )
+        if status == proc.TIMED_OUT:
+            raise Stop(TIMEOUT, f"translator exceeded the time limit of {job.time_limit:g} s")
+        if status != proc.OK:
+            detail = log_tail(log, 3)
+            raise Stop(
                 ERROR,
-                "Fast Downward needs integer costs (scale and round them first): "
-                + ", ".join(fractional[:3]),
+                f"translator failed: {info}" + (f" ({detail})" if detail else ""),
+                log_text(log),
             )
-        tmp = tempfile.mkdtemp(prefix="ssr-fd-")
+        self.last_operators = info.get("operators")
+        if info["unsolvable"]:
+            raise Stop(UNSOLVABLE, f"translator: {info['unsolvable']}")
         try:
-            paths = {k: os.path.join(tmp, k) for k in ("domain.pddl", "problem.pddl")}
-            Path(paths["domain.pddl"]).write_text(to_text(domain))
-            Path(paths["problem.pddl"]).write_text(to_text(problem))
-            sas, log = os.path.join(tmp, "output.sas"), os.path.join(tmp, "translate.log")
-            status, info = _TRANSLATOR.call(
-                (paths["domain.pddl"], paths["problem.pddl"], sas),
-                timeout=clock.remaining(),
-                log_path=log,
-            )
-            if status == proc.TIMED_OUT:
-                return result(TIMEOUT, f"translator exceeded the time limit of {time_limit:g} s")
-            if status != proc.OK:
-                detail = _log_tail(log, 3)
-                return result(
-                    ERROR, f"translator failed: {info}" + (f" ({detail})" if detail else "")
-                )
-            self.last_operators = info.get("operators")
-            if info["unsolvable"]:
-                return result(UNSOLVABLE, f"translator: {info['unsolvable']}")
-            try:
-                search = self._search_option(info, cost_bound)
-            except ValueError as e:
-                return result(ERROR, str(e))
-            plan_path, log = os.path.join(tmp, "sas_plan"), os.path.join(tmp, "search.log")
-            code = proc.run_command(
-                [str(self.binary), "--search", search, "--internal-plan-file", plan_path],
-                clock.remaining(),
-                cwd=tmp,
-                stdin_path=sas,
-                log_path=log,
-            )
-            if code is None or code in _TIMEOUT_CODES:
-                return result(TIMEOUT, f"search exceeded the time limit of {time_limit:g} s")
-            if code in _UNSOLVABLE_CODES:
-                why = _UNSOLVABLE_CODES[code]
-                if cost_bound is not None and code != 11:
-                    why += f" (cost bound {cost_bound:g})"
-                return result(UNSOLVABLE, why)
-            if code in _MEMORY_CODES:
-                return result(ERROR, "out of memory")
-            plan_path = _last_plan(plan_path)
-            if code != 0 or plan_path is None:
-                return result(ERROR, f"search failed with exit code {code}: {_log_tail(log)}")
-            actions = read_plan(plan_path)
-            return priced(result, domain, problem, actions, cost_bound)
-        except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
-            return result(ERROR, f"{type(e).__name__}: {e}")
-        finally:
-            if not self.keep_files:
-                shutil.rmtree(tmp, ignore_errors=True)
+            search = self._search_option(info, job.cost_bound)
+        except ValueError as e:
+            raise Stop(ERROR, str(e)) from None
+        plan_path, log = job.file("sas_plan"), job.file("search.log")
+        code = proc.run_command(
+            [str(self.binary), "--search", search, "--internal-plan-file", plan_path],
+            job.clock.remaining(),
+            cwd=job.dir,
+            stdin_path=sas,
+            log_path=log,
+        )
+        if code is None or code in _TIMEOUT_CODES:
+            raise Stop(TIMEOUT, f"search exceeded the time limit of {job.time_limit:g} s")
+        if code in _UNSOLVABLE_CODES:
+            why = _UNSOLVABLE_CODES[code]
+            if job.cost_bound is not None and code != 11:
+                why += f" (cost bound {job.cost_bound:g})"
+            raise Stop(UNSOLVABLE, why)
+        if code in _MEMORY_CODES:
+            raise Stop(ERROR, "out of memory")
+        plan_path = _last_plan(plan_path)
+        if code != 0 or plan_path is None:
+            raise Stop(ERROR, f"search failed with exit code {code}: {log_tail(log)}", log_text(log))
+        return read_plan(plan_path)
 
 
 def make_planner(variant: str | None = None, **options) -> FastDownward:

@@ -9,27 +9,11 @@ problem's metric).
 from __future__ import annotations
 
 import dataclasses
-import os
-import shutil
-import tempfile
-from pathlib import Path
 
 from .. import syntax as S
 from ..errors import SSRError
-from ..printer import to_text
-from . import proc
-from .base import (
-    ERROR,
-    TIMEOUT,
-    UNSOLVABLE,
-    Capabilities,
-    Clock,
-    PlanResult,
-    describe_variants,
-)
-from .costs import priced
-from .features import unsupported
-from .rename import rename_task
+from .base import UNSOLVABLE, Capabilities, describe_variants
+from .external import ExternalPlanner, Job, Stop
 
 # search name -> (pyperplan search, heuristic or None); "opt" is optimal under unit costs.
 SEARCHES = {"default": ("gbf", "hff"), "opt": ("astar", "lmcut"), "bfs": ("bfs", None)}
@@ -67,7 +51,7 @@ def _search_in_child(domain_path: str, problem_path: str, search: str, heuristic
     return [tuple(op.name.strip("()").split()) for op in found]
 
 
-class Pyperplan:
+class Pyperplan(ExternalPlanner):
     """pyperplan in-process (forked): STRIPS with typing, positive preconditions, unit costs."""
 
     def __init__(self, search: str = "default", *, ignore_costs: bool = False):
@@ -77,6 +61,7 @@ class Pyperplan:
             )
         self.search = search
         self.ignore_costs = ignore_costs
+        self.equality = False  # pyperplan does not read (= ?x ?y)
         self.name = "pyperplan" if search == "default" else f"pyperplan:{search}"
         self.capabilities = Capabilities(
             costs=ignore_costs,
@@ -90,46 +75,19 @@ class Pyperplan:
         )
         import pyperplan.planner  # noqa: F401 - loaded once, before any fork
 
-    def solve(
-        self,
-        domain: S.Domain,
-        problem: S.Problem,
-        time_limit: float = 60.0,
-        cost_bound: float | None = None,
-    ) -> PlanResult:
-        clock = Clock(time_limit)
+    def prepare(self, domain: S.Domain, problem: S.Problem) -> tuple[S.Domain, S.Problem]:
+        return _strip_costs(domain, problem) if self.ignore_costs else (domain, problem)
 
-        def result(status, message="", actions=None, cost=None):
-            return PlanResult(status, actions, cost, clock.elapsed(), self.name, message)
-
-        missing = unsupported(self.capabilities, domain, problem, equality=False)
-        if missing:
-            return result(ERROR, f"{self.name} does not support " + ", ".join(missing))
-        tmp = tempfile.mkdtemp(prefix="ssr-pyperplan-")
-        try:
-            dom, prob = _strip_costs(domain, problem) if self.ignore_costs else (domain, problem)
-            dom, prob, renaming = rename_task(dom, prob, one_namespace=False)
-            d_path, p_path = os.path.join(tmp, "domain.pddl"), os.path.join(tmp, "problem.pddl")
-            Path(d_path).write_text(to_text(dom))
-            Path(p_path).write_text(to_text(prob))
-            status, value = proc.run_forked(
-                _search_in_child,
-                (d_path, p_path, *SEARCHES[self.search]),
-                timeout=clock.remaining(),
-                log_path=os.path.join(tmp, "pyperplan.log"),
-            )
-            if status == proc.TIMED_OUT:
-                return result(TIMEOUT, f"exceeded the time limit of {time_limit:g} s")
-            if status != proc.OK:
-                return result(ERROR, f"pyperplan failed: {value}")
-            if value is None:
-                return result(UNSOLVABLE, "pyperplan's search found no plan")
-            actions = renaming.plan_back([(step[0], tuple(step[1:])) for step in value])
-            return priced(result, domain, problem, actions, cost_bound)
-        except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
-            return result(ERROR, f"{type(e).__name__}: {e}")
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
+    def run(self, job: Job) -> list | None:
+        found = self.run_forked(
+            job,
+            _search_in_child,
+            (job.domain, job.problem, *SEARCHES[self.search]),
+            what="pyperplan",
+        )
+        if found is None:
+            raise Stop(UNSOLVABLE, "pyperplan's search found no plan")
+        return [(step[0], tuple(step[1:])) for step in found]
 
 
 def make_planner(variant: str | None = None, **options) -> Pyperplan:

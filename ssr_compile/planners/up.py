@@ -1,36 +1,19 @@
 """``up:ENGINE``: any unified-planning one-shot planner, by its engine name.
 
-The task is renamed where unified-planning needs it (one namespace for types, predicates,
-functions, actions and objects; plain identifiers), printed to a temporary directory, read by
-unified-planning's PDDL reader and solved by the engine, all in a forked child that is killed,
-with the planner processes it started, when the time limit passes.  The plan is mapped back to
-the input's names.  unified-planning is imported when a planner is built (it takes about a
+The task arrives with the names unified-planning needs (one namespace for types, predicates,
+functions, actions and objects; plain identifiers: ``compile/rename.py``).  A ground task is
+built with unified-planning's modelling API, any other is printed to a temporary directory and
+read by its PDDL reader; the engine solves it in a forked child that is killed, with the
+planner processes it started, when the time limit passes (:class:`~.external.ExternalPlanner`).  unified-planning is imported when a planner is built (it takes about a
 second), never by merely importing ssr_compile.
 """
 
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
-from pathlib import Path
-
 from ..errors import SSRError
-from ..printer import to_text
 from ..syntax import Domain, Problem
-from . import proc
-from .base import (
-    ERROR,
-    SOLVED,
-    TIMEOUT,
-    UNSOLVABLE,
-    Capabilities,
-    Clock,
-    PlanResult,
-)
-from .costs import priced
-from .features import unsupported
-from .rename import rename_task
+from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities
+from .external import ExternalPlanner, Job, Stop
 
 DEFAULT_ENGINE = "fast-downward"
 
@@ -260,8 +243,8 @@ _STATUS = {
 }
 
 
-class UnifiedPlanning:
-    """A unified-planning one-shot planner (``up:ENGINE``), reached through PDDL text."""
+class UnifiedPlanning(ExternalPlanner):
+    """A unified-planning one-shot planner (``up:ENGINE``), in a forked child."""
 
     def __init__(self, engine: str = DEFAULT_ENGINE, *, params: dict | None = None):
         engines = oneshot_engines()
@@ -275,52 +258,19 @@ class UnifiedPlanning:
         self.name = f"up:{engine}"
         self.capabilities = engine_capabilities(engines[engine])
 
-    def solve(
-        self,
-        domain: Domain,
-        problem: Problem,
-        time_limit: float = 60.0,
-        cost_bound: float | None = None,
-    ) -> PlanResult:
-        clock = Clock(time_limit)
-
-        def result(status, message="", actions=None, cost=None):
-            return PlanResult(status, actions, cost, clock.elapsed(), self.name, message)
-
-        missing = unsupported(self.capabilities, domain, problem)
-        if missing:
-            return result(ERROR, f"{self.name} does not support " + ", ".join(missing))
-        tmp = tempfile.mkdtemp(prefix="ssr-up-")
-        try:
-            dom, prob, renaming = rename_task(domain, problem)
-            d_path, p_path = os.path.join(tmp, "domain.pddl"), os.path.join(tmp, "problem.pddl")
-            Path(d_path).write_text(to_text(dom))
-            Path(p_path).write_text(to_text(prob))
-            left = clock.remaining()
-            tree = (dom, prob) if _is_ground(dom) else None
-            status, value = proc.run_forked(
-                _solve_in_child,
-                (d_path, p_path, self.engine, self.params, left, tree),
-                timeout=left,
-                log_path=os.path.join(tmp, "engine.log"),
-            )
-            if status == proc.TIMED_OUT:
-                return result(TIMEOUT, f"exceeded the time limit of {time_limit:g} s")
-            if status != proc.OK:
-                return result(ERROR, f"unified-planning failed: {value}")
-            up_status, actions, log = value
-            mapped = _STATUS.get(up_status, ERROR)
-            if mapped != SOLVED:
-                why = f"unified-planning status {up_status}"
-                if mapped == ERROR and log:
-                    why += ": " + " ".join(log.split())[-300:]
-                return result(mapped, why)
-            actions = renaming.plan_back(actions or [])
-            return priced(result, domain, problem, actions, cost_bound)
-        except Exception as e:  # noqa: BLE001 - a backend answers, it never crashes
-            return result(ERROR, f"{type(e).__name__}: {e}")
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
+    def run(self, job: Job) -> list | None:
+        """A ground task goes to the engine as a tree (UP's modelling API), any other as the
+        PDDL files (UP's reader)."""
+        tree = job.task if _is_ground(job.task[0]) else None
+        args = (job.domain, job.problem, self.engine, self.params, job.clock.remaining(), tree)
+        up_status, actions, log = self.run_forked(job, _solve_in_child, args, what="unified-planning")
+        mapped = _STATUS.get(up_status, ERROR)
+        if mapped != SOLVED:
+            why = f"unified-planning status {up_status}"
+            if mapped == ERROR and log:
+                why += ": " + " ".join(log.split())[-300:]
+            raise Stop(mapped, why, log)
+        return actions or []
 
 
 def make_planner(variant: str | None = None, **options) -> UnifiedPlanning:

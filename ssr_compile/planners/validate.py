@@ -12,11 +12,11 @@ import tempfile
 import warnings
 from pathlib import Path
 
+from ..compile.rename import rename_task
 from ..errors import UnsupportedError
 from ..printer import to_text
 from ..syntax import Domain, Problem
 from .base import GroundAction
-from .rename import rename_task
 
 
 def validate_plan(

@@ -14,7 +14,8 @@ import re
 from dataclasses import dataclass, field
 
 from .. import syntax as S
-from .base import GroundAction
+
+GroundAction = tuple[str, tuple[str, ...]]
 
 SAFE = re.compile(r"^[a-z][a-z0-9_-]*$")
 _KEEP = {"object", "number", "total-cost", "="}
@@ -29,9 +30,14 @@ class Renaming:
     functions: dict[str, str] = field(default_factory=dict)
     actions: dict[str, str] = field(default_factory=dict)
     objects: dict[str, str] = field(default_factory=dict)
+    # the domain's and the problem's own names (unified-planning's reader refuses a problem
+    # named ``37``)
+    names: dict[str, str] = field(default_factory=dict)
 
     def __bool__(self) -> bool:
-        return any((self.types, self.predicates, self.functions, self.actions, self.objects))
+        return any(
+            (self.types, self.predicates, self.functions, self.actions, self.objects, self.names)
+        )
 
     def plan_back(self, actions: list[GroundAction]) -> list[GroundAction]:
         """A plan over the renamed task, in the input's names."""
@@ -51,7 +57,8 @@ def _safe(name: str) -> str:
 def rename_task(
     domain: S.Domain, problem: S.Problem, *, one_namespace: bool = True
 ) -> tuple[S.Domain, S.Problem, Renaming]:
-    """Rename unsafe names (and, with ``one_namespace``, names shared between kinds)."""
+    """Rename unsafe names (and, with ``one_namespace``, names shared between kinds); the
+    domain's and the problem's names too when a reader would refuse them."""
     kinds = {
         "types": [t.name for t in domain.types]
         + [t for t in _type_names(domain.types) if t not in {x.name for x in domain.types}],
@@ -78,6 +85,9 @@ def rename_task(
                 mapping[name] = new
             taken.add(new)
             per_kind[kind].add(new)
+    for name in (domain.name, problem.name, problem.domain_name):
+        if name and not SAFE.match(name) and name not in renaming.names:
+            renaming.names[name] = _safe(name)
     if not renaming:
         return domain, problem, renaming
     return _domain(domain, renaming), _problem(problem, renaming), renaming
@@ -139,6 +149,7 @@ def _map(node, r: Renaming):
 def _domain(d: S.Domain, r: Renaming) -> S.Domain:
     return dataclasses.replace(
         d,
+        name=r.names.get(d.name, d.name),
         types=_typed(d.types, r, r.types),
         constants=_typed(d.constants, r, r.objects),
         predicates=tuple(
@@ -168,6 +179,8 @@ def _domain(d: S.Domain, r: Renaming) -> S.Domain:
 def _problem(p: S.Problem, r: Renaming) -> S.Problem:
     return dataclasses.replace(
         p,
+        name=r.names.get(p.name, p.name),
+        domain_name=r.names.get(p.domain_name, p.domain_name),
         objects=_typed(p.objects, r, r.objects),
         init=tuple(_map(f, r) for f in p.init),
         goal=_map(p.goal, r),
