@@ -34,7 +34,7 @@ import numpy as np
 from ssr_compile import syntax as S
 from ssr_compile.belief.particles import PoseBelief, Surface
 
-from .robot import ARM_CARRY, ARM_TUCK
+from .robot import ARM_CARRY, ARM_TUCK, mount_position, within_reach
 from .tasks import Task
 from .world import DRAWER_TRAVEL, DRAWERS, PLACE_GAP, World
 
@@ -166,6 +166,34 @@ def goal_formula(goal) -> S.Formula:
     return out[0] if len(out) == 1 else S.And(tuple(out))
 
 
+def near_targets(world: World, base) -> list[str]:
+    """The surfaces, drawers and the stove the arm may act on with the base at ``base`` (the
+    ``near`` facts of the reached base configuration): some point of a surface's rectangle
+    (drawers open), a drawer's handle (open or closed) or the stove's button within the arm's
+    reach.  A cheap superset: the streams acting from where the robot is (``*-here``,
+    ``*-from``) are only instantiated for these, not for every belief of every object."""
+    mount = mount_position(base)
+    out = []
+    with world.saved():
+        for d in DRAWERS:
+            world.set_drawer(d, DRAWER_TRAVEL)
+        for s in (*FIXED, *DRAWERS):
+            lo, hi, z = world.surface_world_rect(s)
+            closest = (*np.clip(mount[:2], lo, hi), z)
+            if within_reach(base, closest):
+                out.append(s)
+        for d in DRAWERS:
+            handles = []
+            for q in (0.0, DRAWER_TRAVEL):
+                world.set_drawer(d, q)
+                handles.append(world.handle_pose(d))
+            if d not in out and any(within_reach(base, h) for h in handles):
+                out.append(d)
+    if "stove" not in out and within_reach(base, world.button_pose()[0]):
+        out.append("stove")
+    return sorted(out)
+
+
 def state_problem(
     task: Task, known: KnownState, *, name: str | None = None, extra: tuple = ()
 ) -> tuple[S.Problem, dict]:
@@ -204,6 +232,7 @@ def state_problem(
     init += [_atom("conf", "arm", carry), _atom("stow", carry), _atom("stowheld", carry)]
     base = obj("bq0", tuple(float(v) for v in known.base))
     init += [_atom("conf", "base", base), _atom("atconf", "base", base), _atom("reached", base)]
+    init += [_atom("near", base, x) for x in near_targets(task.world, known.base)]
     arm = tuple(float(v) for v in known.arm)
     if _same(arm, ARM_TUCK):
         init.append(_atom("atconf", "arm", tuck))

@@ -28,6 +28,21 @@ PANDA_URDF = os.path.join(pybullet_data.getDataPath(), "franka_panda", "panda.ur
 BASE_HALF_EXTENTS = (0.25, 0.2, 0.17)
 BASE_CLEARANCE = 0.01  # the box floats 1 cm above the floor (wheels)
 MOUNT_OFFSET = (0.1, 0.0, BASE_CLEARANCE + 2 * BASE_HALF_EXTENTS[2])  # panda_link0 in base frame
+ARM_REACH = 1.2  # metres from the arm's mount beyond which no IK is tried
+
+
+def mount_position(base) -> np.ndarray:
+    """World position of the arm's mount (panda_link0) with the base at ``base`` (x, y, yaw)."""
+    x, y, yaw = (float(v) for v in base)
+    return np.array([x + MOUNT_OFFSET[0] * np.cos(yaw), y + MOUNT_OFFSET[0] * np.sin(yaw),
+                     MOUNT_OFFSET[2]])  # fmt: skip
+
+
+def within_reach(base, point) -> bool:
+    """Cheap kinematic filter: ``point`` is within :data:`ARM_REACH` of the mount at ``base``."""
+    return float(np.linalg.norm(np.asarray(point, float) - mount_position(base))) <= ARM_REACH
+
+
 BASE_LIMITS = ((-3.0, 3.0), (-3.0, 3.0), (-np.pi, np.pi))
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))

@@ -24,8 +24,8 @@ from contextlib import contextmanager
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
-from ssr_compile.sim.problem import LOCALIZED_STD, ON_PROB, canonical_surface, is_localized
-from ssr_compile.sim.robot import ARM_TUCK, MOUNT_OFFSET
+from ssr_compile.sim.problem import canonical_surface, is_localized
+from ssr_compile.sim.robot import ARM_TUCK, within_reach
 from ssr_compile.sim.samplers import Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
 from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
@@ -47,9 +47,9 @@ DELTA = 0.1  # radius of an observation's region X_i, metres
 C_DETECT = 1.0  # c: one detection
 C_RECOVER = 1.0  # c': a failed detection, then look again
 RETRIES = 3  # random IK restarts may miss: a function stream tries this often before failing
-REACH = 1.2  # metres from the arm's mount beyond which no IK is tried
 MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
 FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
+MIN_SIDE_GRASP_HALF_HEIGHT = 0.04  # m: a side grasp of a shorter object hits its support
 SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
 
 
@@ -139,7 +139,15 @@ class KitchenModule:
 
     # -- geometric streams -------------------------------------------------------------------
     def sample_grasp(self, o: str):
-        return self.ks.sample_grasps(o)
+        """The grasps of ``o`` (random order), without side grasps of an object too short for
+        them: the hand closing horizontally at half the block's height (2 cm) hits the surface
+        it rests on, so inv-reach can never succeed (0 of 360 tries) and every plan through
+        such a grasp fails -- the order of the grasps then decides whether Cook plans at all."""
+        hz = self.world.half_extents[o][2]
+        for (g,) in self.ks.sample_grasps(o):
+            if g.kind == "side" and hz < MIN_SIDE_GRASP_HALF_HEIGHT:
+                continue
+            yield (g,)
 
     def sample_placement(self, o: str, s: str):
         for (p,) in self._each(
@@ -154,10 +162,7 @@ class KitchenModule:
     # -- acting from where the robot is (issue 11, fault 1) -----------------------------------
     def _reachable(self, bq, target) -> bool:
         """Cheap kinematic filter: the arm's mount at ``bq`` is within reach of ``target``."""
-        yaw = bq[2]
-        mount = np.array([bq[0] + MOUNT_OFFSET[0] * math.cos(yaw),
-                          bq[1] + MOUNT_OFFSET[0] * math.sin(yaw), MOUNT_OFFSET[2]])  # fmt: skip
-        return float(np.linalg.norm(np.asarray(target, float) - mount)) <= REACH
+        return within_reach(bq, target)
 
     def _snap(self, path, start):
         """A path starting within :data:`SNAP` of the arm configuration ``start`` starts exactly
@@ -180,7 +185,10 @@ class KitchenModule:
         path = self._kin(o, pb, g, bq)
         return None if path is None else (ArmConf(path[0]), path)
 
-    def inv_kin_from(self, o: str, pb: PoseBelief, g: Grasp, bq, aq):
+    def inv_kin_here(self, o: str, pb: PoseBelief, g: Grasp, bq, s: str):
+        return self.inv_kin(o, pb, g, bq)  # (``s``: the surface near ``bq``, for the domain)
+
+    def inv_kin_from(self, o: str, pb: PoseBelief, g: Grasp, bq, aq, s: str):
         path = self._kin(o, pb, g, bq, aq)
         return None if path is None else (path,)
 
@@ -327,7 +335,7 @@ class KitchenModule:
             "plan-push": self._plan_drawer,
             "sample-press-base": self.sample_press_base,
             "plan-press": self.plan_press,
-            "inv-kin-here": self.inv_kin,
+            "inv-kin-here": self.inv_kin_here,
             "plan-pull-here": self._plan_drawer,
             "plan-push-here": self._plan_drawer,
             "plan-press-here": self.plan_press,
@@ -383,7 +391,10 @@ def make_module(task: Task, rng: np.random.Generator, values: dict | None = None
         values = task_problem(task)[1]
     km = KitchenModule(task, rng)
     module = StreamsModule(
-        "ssr_compile.streams.kitchen_module", streams=km.streams(), info=dict(STREAM_INFO), values=values
+        "ssr_compile.streams.kitchen_module",
+        streams=km.streams(),
+        info=dict(STREAM_INFO),
+        values=values,
     )
     module.module = km
     return module

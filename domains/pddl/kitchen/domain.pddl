@@ -14,6 +14,7 @@
     (angle ?d ?a) (open ?d ?a) (closed ?d ?a) (above ?d1 ?d2)
     (stow ?q) (stowempty ?q) (stowheld ?q)
     (reached ?q)                      ; the robot is at configuration ?q (base, arm)
+    (near ?bq ?x)                     ; at reached base ?bq the arm may reach surface/drawer ?x
     (possible ?o ?pb ?s)              ; prior belief ?pb may put ?o on ?s (sample-obs there)
     ; static: certified by streams
     (conf ?r ?q) (traj ?r ?t) (poseb ?o ?pb) (grasp ?o ?g)

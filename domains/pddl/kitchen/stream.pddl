@@ -72,49 +72,55 @@
     :outputs (?aq ?t)
     :certified (and (conf arm ?aq) (reach ?bq ?aq) (presskin ?bq ?aq ?t)))
   ; act from where the robot is (issue 11): the same kinematics from the base configuration
-  ; the robot reached (no sampler certified it), when they allow
+  ; the robot reached (no sampler certified it), when they allow -- only for what is near it
+  ; (a surface, drawer or the stove within the arm's reach: else every belief of every object
+  ; would be tried from there, and fail)
   (:stream inv-kin-here
-    :inputs (?o ?pb ?g ?bq)
-    :domain (and (localized ?o ?pb) (grasp ?o ?g) (conf base ?bq) (reached ?bq))
+    :inputs (?o ?pb ?g ?bq ?s)
+    :domain (and (localized ?o ?pb) (beliefon ?o ?pb ?s) (grasp ?o ?g) (conf base ?bq)
+                 (reached ?bq) (near ?bq ?s))
     :outputs (?aq ?t)
     :certified (and (conf arm ?aq) (traj arm ?t) (reach ?bq ?aq) (kin ?o ?pb ?g ?bq ?aq ?t)))
   (:stream plan-pull-here
     :inputs (?d ?a1 ?a2 ?bq)
-    :domain (and (conf base ?bq) (reached ?bq) (closed ?d ?a1) (open ?d ?a2))
+    :domain (and (conf base ?bq) (reached ?bq) (near ?bq ?d) (closed ?d ?a1) (open ?d ?a2))
     :outputs (?aq1 ?aq2 ?t)
     :certified (and (conf arm ?aq1) (conf arm ?aq2) (reach ?bq ?aq1) (reach ?bq ?aq2)
                     (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)))
   (:stream plan-push-here
     :inputs (?d ?a1 ?a2 ?bq)
-    :domain (and (conf base ?bq) (reached ?bq) (open ?d ?a1) (closed ?d ?a2))
+    :domain (and (conf base ?bq) (reached ?bq) (near ?bq ?d) (open ?d ?a1) (closed ?d ?a2))
     :outputs (?aq1 ?aq2 ?t)
     :certified (and (conf arm ?aq1) (conf arm ?aq2) (reach ?bq ?aq1) (reach ?bq ?aq2)
                     (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)))
   (:stream plan-press-here
     :inputs (?bq)
-    :domain (and (conf base ?bq) (reached ?bq))
+    :domain (and (conf base ?bq) (reached ?bq) (near ?bq stove))
     :outputs (?aq ?t)
     :certified (and (conf arm ?aq) (reach ?bq ?aq) (presskin ?bq ?aq ?t)))
   ; ... and from the arm configuration the robot is in (after an arm motion): the action
   ; starts there, no arm motion first
   (:stream inv-kin-from
-    :inputs (?o ?pb ?g ?bq ?aq)
-    :domain (and (localized ?o ?pb) (grasp ?o ?g) (reached ?bq) (conf arm ?aq) (reached ?aq))
+    :inputs (?o ?pb ?g ?bq ?aq ?s)
+    :domain (and (localized ?o ?pb) (beliefon ?o ?pb ?s) (grasp ?o ?g) (reached ?bq)
+                 (near ?bq ?s) (conf arm ?aq) (reached ?aq))
     :outputs (?t)
     :certified (and (traj arm ?t) (kin ?o ?pb ?g ?bq ?aq ?t)))
   (:stream plan-pull-from
     :inputs (?d ?a1 ?a2 ?bq ?aq1)
-    :domain (and (reached ?bq) (conf arm ?aq1) (reached ?aq1) (closed ?d ?a1) (open ?d ?a2))
+    :domain (and (reached ?bq) (near ?bq ?d) (conf arm ?aq1) (reached ?aq1) (closed ?d ?a1)
+                 (open ?d ?a2))
     :outputs (?aq2 ?t)
     :certified (and (conf arm ?aq2) (reach ?bq ?aq2) (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)))
   (:stream plan-push-from
     :inputs (?d ?a1 ?a2 ?bq ?aq1)
-    :domain (and (reached ?bq) (conf arm ?aq1) (reached ?aq1) (open ?d ?a1) (closed ?d ?a2))
+    :domain (and (reached ?bq) (near ?bq ?d) (conf arm ?aq1) (reached ?aq1) (open ?d ?a1)
+                 (closed ?d ?a2))
     :outputs (?aq2 ?t)
     :certified (and (conf arm ?aq2) (reach ?bq ?aq2) (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)))
   (:stream plan-press-from
     :inputs (?bq ?aq)
-    :domain (and (reached ?bq) (conf arm ?aq) (reached ?aq))
+    :domain (and (reached ?bq) (near ?bq stove) (conf arm ?aq) (reached ?aq))
     :outputs (?t)
     :certified (presskin ?bq ?aq ?t))
   ; paper §IV-A: observations (z, X_i, eps) of ?o under its prior ?pb, X_i on surface ?s
