@@ -447,6 +447,9 @@ def test_no_episode_outlives_its_sweep(tmp_path, how):
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
+        # a shell that started the suite in the background ignores SIGINT and its children
+        # inherit that: give the sweep the default disposition a terminal gives
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         for _ in range(300):

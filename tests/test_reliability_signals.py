@@ -62,6 +62,11 @@ SCRIPT = textwrap.dedent(
 )
 
 
+
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _alive(pid: int) -> bool:
     try:
         with open(f"/proc/{pid}/stat") as f:
@@ -109,6 +114,9 @@ def test_a_signal_stops_the_command_and_its_planner(tmp_path, mode, sig, code, w
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # a shell that started the test suite in the background ignores SIGINT, and its
+        # children inherit that: give the command the default disposition a terminal gives
+        preexec_fn=_default_sigint,
     )
     try:
         pid_text, child_tmp = _wait_for(out / "child.info").split()
