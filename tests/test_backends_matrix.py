@@ -72,3 +72,32 @@ def test_ground_task_keeps_only_reachable_instances():
         for x in __import__("ssr_compile.syntax", fromlist=["walk"]).walk(a.precondition):
             if hasattr(x, "pred"):
                 assert not x.args
+
+
+def test_the_ground_task_does_not_depend_on_string_hashing(tmp_path):
+    """Two processes with different hash seeds ground the same problem into the same text:
+    the planner's tie-breaking, so the plan, must not change from run to run."""
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "from ssr_compile.compile.pipeline import compile_problem\n"
+        "from ssr_compile.examples import load_example\n"
+        "from ssr_compile.parse import parse_file\n"
+        "from ssr_compile.planners import get_planner\n"
+        "from ssr_compile.printer import to_text\n"
+        "ex = load_example('tamp2d')\n"
+        "p = parse_file(ex.folder / 'problem-blocked.pddl')\n"
+        "caps = get_planner('pyperplan').capabilities\n"
+        "c = compile_problem(ex.domain, ex.streams, p, caps=caps, level=3)\n"
+        "print(to_text(c.domain) + to_text(c.problem))\n"
+    )
+    texts = []
+    for seed in ("1", "2"):
+        env = dict(os.environ, PYTHONHASHSEED=seed)
+        out = subprocess.run(
+            [sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True
+        )
+        texts.append(out.stdout)
+    assert texts[0] == texts[1] and "(:action" in texts[0]

@@ -62,25 +62,27 @@ class Grounded:
 
 
 class _Index:
-    """Facts by predicate, for joins."""
+    """Facts by predicate, for joins; rows keep the order they were added in (a set's order
+    would depend on the process's string hashing, and the ground task -- so the planner's tie
+    breaking and the plan -- with it)."""
 
     def __init__(self, facts: Iterable[Fact] = ()):
-        self.by_pred: dict[str, set[tuple[str, ...]]] = {}
+        self.by_pred: dict[str, dict[tuple[str, ...], None]] = {}
         for f in facts:
             self.add(f)
 
     def add(self, fact: Fact) -> bool:
-        rows = self.by_pred.setdefault(fact[0], set())
+        rows = self.by_pred.setdefault(fact[0], {})
         if fact[1] in rows:
             return False
-        rows.add(fact[1])
+        rows[fact[1]] = None
         return True
 
     def __contains__(self, fact: Fact) -> bool:
         return fact[1] in self.by_pred.get(fact[0], ())
 
-    def rows(self, pred: str) -> set[tuple[str, ...]]:
-        return self.by_pred.get(pred, set())
+    def rows(self, pred: str):
+        return self.by_pred.get(pred, {}).keys()
 
 
 def _positive_atoms(f) -> list[S.Atom]:

@@ -10,6 +10,8 @@ second), never by merely importing ssr_compile.
 
 from __future__ import annotations
 
+import os
+
 from ..errors import SSRError
 from ..syntax import Domain, Problem
 from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities
@@ -210,6 +212,10 @@ def _solve_in_child(domain_path, problem_path, engine: str, params, timeout: flo
     """Runs in the forked child: build or read the task, solve, return plain data."""
     from unified_planning.shortcuts import OneshotPlanner
 
+    # Engines write scratch files into the working directory (Fast Downward's translator:
+    # output.sas): two calls in one folder -- a parallel sweep -- would read each other's.
+    # The child works in the call's private folder.
+    os.chdir(os.path.dirname(os.path.abspath(domain_path)))
     _environment()
     if tree is not None:
         task = to_up_problem(*tree)
