@@ -17,14 +17,26 @@ import numpy as np
 
 STREAMS: dict = {}  # bound per problem by for_problem()
 TASK_SEED = 0
-TASKS = ("inspect", "stow", "swap", "cook")
-
-
 def task_name(problem_path: str | Path) -> str:
-    name = Path(problem_path).stem.removeprefix("problem-")
-    if name not in TASKS:
-        raise ValueError(f"{problem_path}: expected problem-<task>.pddl with a task among {TASKS}")
-    return name
+    """The task a kitchen problem file states: its problem name ``kitchen-<task>-<seed>`` (so
+    a copy under any file name works), else its file name ``problem-<task>.pddl``."""
+    from ssr_compile.parse import parse_file
+    from ssr_compile.sim.tasks import TASKS
+
+    try:
+        name = parse_file(problem_path).name
+    except Exception:  # noqa: BLE001 - unreadable here: the caller reports the file itself
+        name = ""
+    parts = name.split("-")
+    if len(parts) >= 2 and parts[0] == "kitchen" and parts[1] in TASKS:
+        return parts[1]
+    stem = Path(problem_path).stem.removeprefix("problem-")
+    if stem in TASKS:
+        return stem
+    raise ValueError(
+        f"{problem_path}: a kitchen problem names its task, (problem kitchen-<task>-<seed>) "
+        f"with a task among {', '.join(TASKS)}"
+    )
 
 
 def for_problem(problem_path: str | Path, seed: int = 0):
@@ -54,6 +66,8 @@ def problem_text(name: str) -> str:
 
 
 if __name__ == "__main__":  # pragma: no cover - a maintenance command
+    from ssr_compile.sim.tasks import TASKS
+
     folder = Path(sys.argv[1] if len(sys.argv) > 1 else "domains/pddl/kitchen")
     for name in TASKS:
         (folder / f"problem-{name}.pddl").write_text(problem_text(name))

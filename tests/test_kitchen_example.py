@@ -33,3 +33,22 @@ def test_solve_folder_inspect(capsys):
     # Deferral is on in example.toml: later arm motions stay optimistic.
     assert any(step["deferred"] for step in out["plan"][1:])
     assert not out["plan"][0]["deferred"]
+
+
+def test_a_copy_of_a_kitchen_problem_under_another_name_is_served(tmp_path):
+    """The task comes from the problem's own name (kitchen-<task>-<seed>), not its file name."""
+    from ssr_compile.resources import domains_dir
+    from ssr_compile.streams.kitchen_example import task_name
+
+    copy = tmp_path / "my-inspect.pddl"
+    copy.write_text((domains_dir() / "kitchen" / "problem-swap.pddl").read_text())
+    assert task_name(copy) == "swap"
+    odd = tmp_path / "problem-cook.pddl"
+    odd.write_text("(define (problem other) (:domain kitchen) (:goal (handempty)))")
+    assert task_name(odd) == "cook"  # the file name when the problem's name says nothing
+    nothing = tmp_path / "whatever.pddl"
+    nothing.write_text("(define (problem other) (:domain kitchen) (:goal (handempty)))")
+    import pytest
+
+    with pytest.raises(ValueError, match="names its task"):
+        task_name(nothing)
