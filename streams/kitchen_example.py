@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from ssr_compile.sim.tasks import TASKS
 
 STREAMS: dict = {}  # bound per problem by for_problem()
 TASK_SEED = 0
@@ -21,7 +22,6 @@ def task_name(problem_path: str | Path) -> str:
     """The task a kitchen problem file states: its problem name ``kitchen-<task>-<seed>`` (so
     a copy under any file name works), else its file name ``problem-<task>.pddl``."""
     from ssr_compile.parse import parse_file
-    from ssr_compile.sim.tasks import TASKS
 
     try:
         name = parse_file(problem_path).name
@@ -66,8 +66,6 @@ def problem_text(name: str) -> str:
 
 
 if __name__ == "__main__":  # pragma: no cover - a maintenance command
-    from ssr_compile.sim.tasks import TASKS
-
     folder = Path(sys.argv[1] if len(sys.argv) > 1 else "domains/pddl/kitchen")
     for name in TASKS:
         (folder / f"problem-{name}.pddl").write_text(problem_text(name))
