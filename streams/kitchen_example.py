@@ -34,8 +34,8 @@ def task_name(problem_path: str | Path) -> str:
     if stem in TASKS:
         return stem
     raise ValueError(
-        f"{problem_path}: a kitchen problem names its task, (problem kitchen-<task>-<seed>) "
-        f"with a task among {', '.join(TASKS)}"
+        f"{problem_path}: a kitchen problem names its task -- (problem kitchen-<task>-<seed>) "
+        f"or a file problem-<task>.pddl -- with a task among {', '.join(TASKS)}"
     )
 
 
