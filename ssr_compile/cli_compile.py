@@ -137,10 +137,10 @@ def attach_domain_file(e: SSRError, domain_path: str) -> SSRError:
 
 
 def _caps_for(spec: str | None):
-    from .compile.pipeline import FullCapabilities
+    from .compile.capabilities import Capabilities
 
     if not spec:
-        return FullCapabilities()
+        return Capabilities()
     from .planners import get_planner
 
     return get_planner(spec).capabilities

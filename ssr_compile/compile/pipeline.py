@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 
 from .. import syntax as S
 from ..check import atoms
+from .capabilities import Capabilities
 from .constraints import Constrained, constrain_plan
 from .instantiate import Instance, Instantiation, Result, instantiate
 from .lower import Lowered, lower
@@ -20,17 +21,9 @@ from .lower import Lowered, lower
 Plan = list[tuple[str, tuple[str, ...]]]
 
 
-@dataclass(frozen=True)
-class FullCapabilities:
-    """Everything supported: compile for Fast Downward-like backends (and artifacts)."""
-
-    costs: bool = True
-    axioms: bool = True
-    negative_preconditions: bool = True
-    disjunction: bool = True
-    quantifiers: bool = True
-    conditional_effects: bool = True
-    optimal: bool = False
+# Everything supported (``FullCapabilities`` is the old name of the type).
+EVERYTHING = Capabilities()
+FullCapabilities = Capabilities
 
 
 @dataclass
@@ -86,7 +79,7 @@ def compile_problem(
     streams: S.StreamFile | None,
     problem: S.Problem,
     *,
-    caps=FullCapabilities(),
+    caps=EVERYTHING,
     level: int = 3,
     evaluated: Iterable[Result] = (),
     disabled: Iterable[Instance] = (),

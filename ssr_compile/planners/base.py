@@ -9,9 +9,10 @@ outside its capabilities answers with status ``"error"`` and a message instead o
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
+from ..compile.capabilities import Capabilities  # noqa: F401 (the backends' type)
 from ..syntax import Domain, Problem
 
 SOLVED = "solved"
@@ -21,25 +22,6 @@ ERROR = "error"
 STATUSES = (SOLVED, UNSOLVABLE, TIMEOUT, ERROR)
 
 GroundAction = tuple[str, tuple[str, ...]]
-
-
-@dataclass(frozen=True)
-class Capabilities:
-    """The PDDL features a backend accepts (and whether its plans are cost-optimal)."""
-
-    costs: bool
-    axioms: bool
-    negative_preconditions: bool
-    disjunction: bool
-    quantifiers: bool
-    conditional_effects: bool
-    optimal: bool = False
-    # Give the backend a ground task (compile/ground.py): for planners that cannot take
-    # quantifiers and axioms, and for readers that enumerate every grounding themselves.
-    ground: bool = False
-
-    def as_dict(self) -> dict[str, bool]:
-        return asdict(self)
 
 
 @dataclass
