@@ -11,7 +11,7 @@ from pathlib import Path
 from . import cli
 from . import syntax as S
 from .cli import load_files, register, write_files_atomically
-from .errors import SSRError
+from .errors import PlannerFailure, SSRError
 from .json_output import document, dumps
 
 
@@ -355,7 +355,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         for w in warnings:
             print(w, file=sys.stderr)
         if result.status == "error":
-            raise SSRError(f"planner {args.planner} failed: {result.message}")
+            raise PlannerFailure(args.planner, result.message, detail=result.detail or "")
         if result.status == UNSOLVABLE:
             result.message = (
                 f"no optimistic plan at any level: every stream instance was made by level "

@@ -107,3 +107,19 @@ def test_an_internal_error_is_exit_3(monkeypatch, capsys):
 
 def test_epilog_documents_exit_3():
     assert "3 a planner, a stream's code or ssr-compile failed" in build_parser().epilog
+
+
+def test_plan_reports_a_planner_error_as_the_planners_fault(monkeypatch, capsys):
+    """`plan` with a backend that answers "error": exit 3 and one line naming the backend."""
+    from ssr_compile.cli import main
+    from ssr_compile.planners import base
+    from ssr_compile.planners.fd import FastDownward
+
+    def broken(self, domain, problem, time_limit=60.0, cost_bound=None):
+        return base.PlanResult("error", None, None, 0.0, self.name, "exploded", detail="log")
+
+    monkeypatch.setattr(FastDownward, "solve", broken)
+    code = main(["plan", "tamp2d", "--problem", "problem", "--planner", "fd"])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert "planner fd failed: exploded" in err and "Traceback" not in err
