@@ -25,6 +25,22 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 
+# Every shipped example problem with the instantiation level at which it has an optimistic
+# plan (Stow and Cook need deeper stream chains): the backend matrix (tests, bench) runs these.
+SHIPPED_PROBLEMS: tuple[tuple[str, str, int], ...] = (
+    ("tamp2d", "problem.pddl", 3),
+    ("tamp2d", "problem-blocked.pddl", 3),
+    ("tamp2d-routes", "problem.pddl", 3),
+    ("belief-detect", "problem-occluded.pddl", 3),
+    ("belief-detect", "problem-clear.pddl", 3),
+    ("progress", "problem.pddl", 3),
+    ("kitchen", "problem-inspect.pddl", 3),
+    ("kitchen", "problem-swap.pddl", 3),
+    ("kitchen", "problem-stow.pddl", 5),
+    ("kitchen", "problem-cook.pddl", 5),
+)
+
+
 @dataclass(frozen=True)
 class Example:
     folder: Path

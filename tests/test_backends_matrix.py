@@ -11,22 +11,12 @@ from __future__ import annotations
 import pytest
 
 from ssr_compile.compile.pipeline import compile_problem
-from ssr_compile.examples import load_example
+from ssr_compile.examples import SHIPPED_PROBLEMS, load_example
 from ssr_compile.parse import parse_file
 from ssr_compile.planners import get_planner
 from ssr_compile.preimage import plan_preimage
 
-PROBLEMS = [
-    ("tamp2d", "problem.pddl", 3),
-    ("tamp2d", "problem-blocked.pddl", 3),
-    ("tamp2d-routes", "problem.pddl", 3),
-    ("belief-detect", "problem-occluded.pddl", 3),
-    ("progress", "problem.pddl", 3),
-    ("kitchen", "problem-inspect.pddl", 3),
-    ("kitchen", "problem-swap.pddl", 3),
-    ("kitchen", "problem-stow.pddl", 5),
-    ("kitchen", "problem-cook.pddl", 5),
-]
+PROBLEMS = SHIPPED_PROBLEMS
 PLANNERS = ["fd", "pyperplan", "up:fast-downward", "up:pyperplan"]
 
 
