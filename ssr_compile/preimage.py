@@ -39,7 +39,7 @@ class Preimage:
     goal_facts: set[S.Atom] = field(default_factory=set)
 
 
-class _Evaluator:
+class _SupportTracker:
     def __init__(self, domain: S.Domain, objects: list[str], static: set[str]):
         self.axioms: dict[str, list[S.Axiom]] = defaultdict(list)
         for ax in domain.axioms:
@@ -193,7 +193,7 @@ def _effect_atoms(effect, out: set[str]) -> None:
         _effect_atoms(effect.effect, out)
 
 
-def _apply(effect, state: set[S.Atom], ev: _Evaluator, adds: set, dels: set, costs: list) -> None:
+def _apply(effect, state: set[S.Atom], ev: _SupportTracker, adds: set, dels: set, costs: list) -> None:
     if effect is None:
         return
     if isinstance(effect, S.And):
@@ -223,7 +223,7 @@ def plan_preimage(domain: S.Domain, problem: S.Problem, plan: Plan) -> Preimage:
     static = {p.name for p in domain.predicates} - fluent_predicates(domain)
     static |= {f.pred for f in problem.init if isinstance(f, S.Atom)} - fluent_predicates(domain)
     objects = [o.name for o in problem.objects] + [c.name for c in domain.constants]
-    ev = _Evaluator(domain, objects, static)
+    ev = _SupportTracker(domain, objects, static)
     state = {f for f in problem.init if isinstance(f, S.Atom)}
     out = Preimage()
     for i, (name, args) in enumerate(plan, start=1):

@@ -82,12 +82,16 @@ class StreamsModule:
     info: dict[str, StreamInfo] = field(default_factory=dict)
     values: dict[str, Any] = field(default_factory=dict)
     module: Any = None
+    _checked: set = field(default_factory=set, repr=False, compare=False)
 
     def info_for(self, name: str) -> StreamInfo:
         return self.info.get(name, StreamInfo())
 
     def check_against(self, stream_file: S.StreamFile, filename: str | None = None) -> None:
-        """Every stream and function the file declares must have a callable."""
+        """Every stream and function the file declares must have a callable (checked once per
+        stream file: the CLI checks with the file's name, the solver again without)."""
+        if stream_file in self._checked:
+            return
         declared = [s.name for s in stream_file.streams] + [f.name for f in stream_file.functions]
         declared += [p.name for p in stream_file.predicates]
         missing = [n for n in declared if n not in self.streams]
@@ -117,6 +121,7 @@ class StreamsModule:
                 f"{', '.join(sorted(known)) or 'none'})",
                 file=filename,
             )
+        self._checked.add(stream_file)
 
 
 def load_streams_module(spec: str, *, search: list[Path] | None = None) -> StreamsModule:
