@@ -165,17 +165,18 @@ def instantiate(
                 if inst_level > depth:
                     continue
                 seen.add(inst)
+                if len(seen) > MAX_INSTANCES:  # while building, not after the whole depth
+                    raise UnsupportedError(
+                        f"optimistic instantiation made more than {MAX_INSTANCES} stream "
+                        f"instances at level {depth}; lower the level or restrict the stream "
+                        "domains"
+                    )
                 key = tuple(position[f] for f in dom_facts)
                 found.append((key, (stream, inst, binding, dom_facts, inst_level)))
             if fresh is not None:
                 # The order of a full nested-loop join over the index (deterministic names).
                 found.sort(key=lambda x: x[0])
             made.extend(m for _k, m in found)
-        if len(seen) > MAX_INSTANCES:
-            raise UnsupportedError(
-                f"optimistic instantiation made more than {MAX_INSTANCES} stream instances at "
-                f"level {depth}; lower the level or restrict the stream domains"
-            )
         for stream, inst, binding, dom_facts, inst_level in made:
             outputs = []
             full = dict(binding)
