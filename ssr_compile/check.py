@@ -577,8 +577,24 @@ def check_streams(
         if missing:
             report.warn(
                 "predicates used by the stream file but not declared by the domain: "
-                + " ".join(missing)
+                + " ".join(missing),
+                arities.get(missing[0], (0, None))[1],
             )
+        # A stream whose domain needs a fact that neither the domain's vocabulary (the
+        # problem's facts) nor any stream's certified facts can provide never fires: usually
+        # a typo such as Blok for Block.
+        certified = {a.pred for s in f.streams for a in atoms(s.certified)}
+        certified |= {a.pred for r in f.rules for a in atoms(r.certified)}
+        for s in f.streams:
+            for a in atoms(s.domain):
+                if a.pred == "=" or a.pred in certified:
+                    continue
+                if declared.predicate_arity(a.pred) is None:
+                    report.warn(
+                        f"stream '{s.name}' can never fire: its domain needs '{a.pred}', which "
+                        "the domain does not declare and no stream certifies",
+                        a.span,
+                    )
         for name, (arity, span) in sorted(arities.items()):
             want = declared.predicate_arity(name)
             if want is not None and want != arity:

@@ -337,6 +337,10 @@ def run(args: argparse.Namespace) -> int:
             continue
         if not solution.solved:
             status = 1
+            if not args.verbose:  # the likely cause, said even without -v
+                for w in warnings:
+                    if "can never fire" in w:
+                        print(w, file=sys.stderr)
         if solution.message and not math.isinf(max_cost):
             solution.message = in_user_units(solution.message, max_cost)
         if args.json:

@@ -43,7 +43,7 @@ def test_quirks_fixture_checks_with_the_expected_warnings():
     r = check_streams(streams, domain, filename="s.pddl")
     assert r.errors == []
     assert r.warnings == [
-        "s.pddl: warning: predicates used by the stream file but not declared by the domain: pose"
+        "s.pddl:8:35: warning: predicates used by the stream file but not declared by the domain: pose"
     ]
     r = check_problem(problem, domain, streams=streams)
     assert r.errors == [] and r.warnings == []
