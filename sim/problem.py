@@ -266,10 +266,11 @@ def state_problem(
         pb = obj(belief_name(o), belief)
         init += [_atom("poseb", o, pb), _atom("atposeb", o, pb)]
         probs = belief.surface_probs()
-        if is_localized(belief):  # (detecting it again stays possible: a plan's tail may)
+        if is_localized(belief):  # (no detecting it again: observing a localized object
+            # again gains nothing a plan needs, and its observations, posteriors and
+            # visibility tests would multiply the optimistic problem of every replan)
             s = belief.most_likely_surface()
             init += [_atom("localized", o, pb), _atom("beliefon", o, pb, s)]
-            init.append(_atom("possible", o, pb, s))
             continue
         init += [
             _atom("possible", o, pb, s)
