@@ -146,6 +146,8 @@ class _FormulaChecker:
         self.v = vocab
         self.objects = objects if objects is not None else {}
         self.used: set[str] = set()  # requirement flags the formulas need
+        # checking a domain: names it uses without declaring them (-> first use)
+        self.domain_names: dict[str, S.Span | None] | None = None
 
     def formula(self, f, scope: frozenset[str], where: str, effect: bool = False) -> None:
         if f is None:
@@ -222,7 +224,20 @@ class _FormulaChecker:
             and t.name not in self.objects
             and not _numeric(t.name)
         ):
-            self.r.error(f"undeclared constant '{t.name}' in {where}", t.span)
+            if self.domain_names is not None:
+                # A domain may name an object its problems declare (the paper writes
+                # (AtConf base ?bq) with `base` an object): Fast Downward accepts it; the
+                # problem's check says whether it is declared there.
+                if t.name not in self.domain_names:
+                    self.domain_names[t.name] = t.span
+                    self.r.warn(
+                        f"'{t.name}' in {where} is not declared in the domain's :constants; "
+                        f"it must be an object of every problem (declare it with "
+                        f"(:constants {t.name}) to make the domain stand alone)",
+                        t.span,
+                    )
+            else:
+                self.r.error(f"undeclared constant '{t.name}' in {where}", t.span)
 
     def fluent(self, f: S.FuncTerm, scope: frozenset[str], where: str, cost: bool = False) -> None:
         if f.name == COST:
@@ -357,6 +372,7 @@ def check_domain(
     report = Report(filename, source)
     vocab = Vocabulary.of(domain, streams)
     fc = _FormulaChecker(report, vocab)
+    fc.domain_names = {}
     _duplicates(report, domain.types, "type")
     _duplicates(report, domain.constants, "constant")
     _duplicate_declarations(report, domain.predicates)
@@ -466,6 +482,13 @@ def check_problem(
     vocab = Vocabulary.of(domain, streams)
     objects = {o.name: o.type for o in problem.objects}
     fc = _FormulaChecker(report, vocab, objects)
+    for name, span in undeclared_domain_names(domain).items():
+        if name not in objects:
+            report.error(
+                f"the domain uses '{name}' (at {span}), which neither its :constants nor this "
+                "problem's :objects declare",
+                problem.span,
+            )
     for o in problem.objects:
         fc.type_ref(o.type, o.span, "the :objects section")
     for fact in problem.init:
@@ -600,6 +623,19 @@ def check_streams(
             if want is not None and want != arity:
                 report.error(f"'{name}' takes {want} arguments in the domain, found {arity}", span)
     return report
+
+
+def undeclared_domain_names(domain: S.Domain) -> dict[str, S.Span | None]:
+    """Names the domain's formulas use without declaring them as constants (-> first use)."""
+    fc = _FormulaChecker(Report("<domain>"), Vocabulary.of(domain))
+    fc.domain_names = {}
+    for a in (*domain.actions,):
+        scope = frozenset(p.name for p in a.parameters)
+        fc.formula(a.precondition, scope, "a precondition")
+        fc.formula(a.effect, scope, "an effect", effect=True)
+    for ax in domain.axioms:
+        fc.formula(ax.body, frozenset(p.name for p in ax.parameters), "an axiom")
+    return fc.domain_names
 
 
 def variables(f) -> list[S.Var]:

@@ -74,6 +74,25 @@ def declare_stream_predicates(domain: S.Domain, streams: S.StreamFile | None) ->
     return replace(domain, predicates=domain.predicates + new)
 
 
+def objects_as_constants(domain: S.Domain, problem: S.Problem) -> tuple[S.Domain, S.Problem]:
+    """Objects of the problem that the domain's formulas name (the paper's ``(AtConf base
+    ?bq)`` with ``base`` an object) become domain constants: planners' readers refuse a
+    domain that names an undeclared object."""
+    from ..check import undeclared_domain_names
+
+    used = undeclared_domain_names(domain)
+    if not used:
+        return domain, problem
+    moved = tuple(o for o in problem.objects if o.name in used)
+    if not moved:
+        return domain, problem
+    names = {o.name for o in moved}
+    return (
+        replace(domain, constants=domain.constants + moved),
+        replace(problem, objects=tuple(o for o in problem.objects if o.name not in names)),
+    )
+
+
 def compile_problem(
     domain: S.Domain,
     streams: S.StreamFile | None,
@@ -93,6 +112,7 @@ def compile_problem(
     share: bool = False,
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
+    domain, problem = objects_as_constants(domain, problem)
     inst = None
     if streams is not None:
         inst = instantiate(
