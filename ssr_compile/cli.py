@@ -9,6 +9,7 @@ imports (planners, PyBullet) happen inside the commands that need them, so ``che
 from __future__ import annotations
 
 import argparse
+import errno
 import math
 import os
 import signal
@@ -603,6 +604,14 @@ def main(argv: list[str] | None = None) -> int:
         return 128 + signum
     except BrokenPipeError:
         return 0
+    except OSError as e:
+        if e.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS):
+            _print_failure(f"ssr-compile: internal error: {type(e).__name__}: {e}", e, debug)
+            return Failure.exit_code
+        # the output could not be written (a full disk, /dev/full): the environment's fault
+        where = f" {e.filename}" if e.filename else " the output"
+        print(f"ssr-compile: cannot write{where}: {e.strerror}", file=sys.stderr)
+        return 1
     except Exception as e:  # noqa: BLE001 - a bug of ssr-compile: one line, exit 3
         _print_failure(f"ssr-compile: internal error: {type(e).__name__}: {e}", e, debug)
         return Failure.exit_code

@@ -133,3 +133,23 @@ def test_write_atomically_replaces_a_regular_file(tmp_path):
     write_atomically(out, "new\n")
     assert out.read_text() == "new\n"
     assert [p.name for p in tmp_path.iterdir()] == ["x.txt"]
+
+
+def test_a_full_disk_is_one_line_and_exit_1(tmp_path):
+    """`fmt > /dev/full`: the output cannot be written -- the environment's fault, not a bug."""
+    import os
+    import subprocess
+    import sys
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    (tmp_path / "d.pddl").write_text("(define (domain d) (:predicates (p)))")
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [sys.executable, "-m", "ssr_compile.cli", "fmt", str(tmp_path / "d.pddl")],
+            stdout=full, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+    assert proc.returncode == 1
+    assert proc.stderr.strip().splitlines() == [
+        "ssr-compile: cannot write the output: No space left on device"
+    ]
