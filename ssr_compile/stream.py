@@ -157,6 +157,10 @@ def load_streams_module(spec: str, *, search: list[Path] | None = None) -> Strea
         raise StreamError(
             f"streams module '{spec}' failed to import: {type(e).__name__}: {e}"
         ) from None
+    except SystemExit as e:  # sys.exit() in the module's top level: its fault, not a success
+        raise StreamError(
+            f"streams module '{spec}' called sys.exit({e.code!r}) while being imported"
+        ) from None
     return from_module(module, spec)
 
 

@@ -35,3 +35,13 @@ def test_stream_info_for_an_undeclared_stream_is_reported(tmp_path):
     with pytest.raises(SSRError, match="'sample-posee'.*the names that exist: .*sample-placement"):
         module.check_against(streams, str(TAMP2D / "stream.pddl"))
     real.check_against(streams)  # the shipped module names only its own streams
+
+
+def test_a_module_calling_sys_exit_while_imported_is_an_error_naming_it(tmp_path):
+    from ssr_compile.errors import StreamError
+    from ssr_compile.stream import load_streams_module
+
+    mod = tmp_path / "exits.py"
+    mod.write_text("import sys\nsys.exit(0)\nSTREAMS = {}\n")
+    with pytest.raises(StreamError, match=r"called sys.exit\(0\) while being imported"):
+        load_streams_module(str(mod))
