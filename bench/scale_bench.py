@@ -59,6 +59,19 @@ def tamp2d_problem(n: int) -> str:
     )
 
 
+def check_rate(domain: Path, problem: Path) -> tuple[float, float, float]:
+    """`ssr-compile check` on a big problem: seconds, MB/s, peak MB per MB of input."""
+    size = problem.stat().st_size / 1e6
+    cmd = [sys.executable, "-m", "ssr_compile.cli", "check", str(domain), str(problem)]
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    wall = time.perf_counter() - start
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    if proc.returncode != 0:
+        raise SystemExit(proc.stderr)
+    return wall, size / wall, peak / size
+
+
 def run(domain: Path, stream: Path, problem: Path, level: int) -> tuple[float, float, str]:
     out = Path(tempfile.mkdtemp(prefix="ssr-scale-out-"))
     cmd = [sys.executable, "-m", "ssr_compile.cli", "compile", str(domain), str(stream),
@@ -93,6 +106,13 @@ def main() -> None:
         wall, mb, what = run(tamp / "domain.pddl", tamp / "stream.pddl", path, 1)
         print(f"{'tamp2d, level 1':22s} {n:7d} {wall:8.2f} {mb:8.0f}  {what}")
     print("peak MB: the largest resident size of any compile so far (getrusage of children)")
+    print()
+    print(f"{'check, gripper':22s} {'MB':>7s} {'wall s':>8s} {'MB/s':>8s} {'peak MB/MB':>10s}")
+    for n in [20000] + ([200000] if args.full else []):
+        path = tmp / f"gripper-check-{n}.pddl"
+        path.write_text(gripper_problem(n))
+        wall, rate, per = check_rate(tmp / "gripper.pddl", path)
+        print(f"{'':22s} {path.stat().st_size / 1e6:7.1f} {wall:8.2f} {rate:8.2f} {per:10.1f}")
 
 
 if __name__ == "__main__":
