@@ -173,7 +173,7 @@ def _enumerate_free(free, b, domain_of) -> Iterator[dict[str, str]]:
 
 class _Grounder:
     def __init__(self, domain: S.Domain, problem: S.Problem):
-        from .lower import objects_by_type
+        from .quantifiers import objects_by_type
 
         self.domain, self.problem = domain, problem
         self.fluent_preds = set()

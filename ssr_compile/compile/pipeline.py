@@ -1,9 +1,18 @@
 """The whole compilation: PDDLStream (domain, streams, problem) -> plain cost-PDDL for a backend.
 
-Passes, each a module of this package: instantiate (optimistic stream instantiation), derived
-(axioms kept or compiled away), costs (integer action costs), constraints (Algorithm 2, when a
-plan tail is given), lower (fit the backend's capabilities).  The result keeps what is needed
-to map a plan back to the input's names and to the stream instances it relies on.
+The passes, each a module of this package, in the order :func:`compile_problem` runs them:
+
+1. ``objects_as_constants`` (here): problem objects the domain names become domain constants;
+2. ``instantiate``: optimistic stream instantiation (optimistic objects and facts, provenance);
+3. ``constraints``: Algorithm 2, when a plan tail is given;
+4. ``lower``, which fits the task to the backend's :class:`~.capabilities.Capabilities` with
+   ``ground`` (for backends that take a ground task), ``derived`` (axioms compiled away when
+   unsupported), ``quantifiers``, ``disjunctions``, ``negations``, ``costs`` (integer action
+   costs) and ``rename`` (names every reader accepts).
+
+Each pass keeps what maps a plan of its output back to its input (``Lowered.map_plan``,
+``Grounded.map_plan``, ``Constrained.map_plan``, the renaming); :meth:`Compiled.map_plan`
+chains them, and the instantiation names the stream instances a plan relies on.
 """
 
 from __future__ import annotations
