@@ -27,7 +27,6 @@ sys.path.insert(0, str(ROOT))
 
 from ssr_compile.focused import solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
-from ssr_compile.stream import load_streams_module  # noqa: E402
 
 FOLDER = ROOT / "domains/pddl/tamp2d"
 WIDTH, HEIGHT = 0.5, 0.8
@@ -73,9 +72,9 @@ def run_once(n: int, args) -> tuple:
     d = parse_domain((FOLDER / "domain.pddl").read_text())
     s = parse_stream_file((FOLDER / "stream.pddl").read_text())
     p = parse_problem(text)
-    module = load_streams_module("ssr_compile.streams.tamp2d", search=[ROOT])
-    module.module.seed(args.seed)
-    module = replace(module, values=values)
+    from ssr_compile.streams import tamp2d
+
+    module = replace(tamp2d.make_module(args.seed), values=values)
     start = time.perf_counter()
     sol = solve(
         d,
