@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import SSRError
+from .planners.proc import _descendants
 
 VARIANTS = ("neither", "constraints", "deferred", "both")  # Table I's column order
 KITCHEN_TASKS = ("inspect", "stow", "swap", "cook")  # Table I's row order
@@ -501,30 +502,6 @@ def kill_tree(pid: int) -> None:
                 os.kill(p, signal.SIGKILL)
             except (ProcessLookupError, PermissionError):
                 pass
-
-
-def _descendants(pid: int) -> list[int]:
-    parents: dict[int, list[int]] = {}
-    try:
-        entries = os.listdir("/proc")
-    except OSError:
-        return []
-    for entry in entries:
-        if not entry.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry}/stat", "rb") as f:
-                stat = f.read()
-            ppid = int(stat[stat.rindex(b")") + 2 :].split()[1])
-        except (OSError, ValueError, IndexError):
-            continue
-        parents.setdefault(ppid, []).append(int(entry))
-    out, todo = [], [pid]
-    while todo:
-        for child in parents.get(todo.pop(), []):
-            out.append(child)
-            todo.append(child)
-    return out
 
 
 def _exit_reason(exitcode: int | None) -> tuple[str, str]:
