@@ -12,7 +12,7 @@ from dataclasses import replace
 import pytest
 
 from ssr_compile import syntax as S
-from ssr_compile.compile.constraints import ASSIGNED, BOUND, constrain_plan
+from ssr_compile.compile.constraints import ASSIGNED, constrain_plan
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.parse import parse_domain, parse_problem
 from ssr_compile.planners import get_planner
@@ -67,8 +67,11 @@ def test_structure_of_the_constrained_problem():
     assert S.Atom("=", (S.Var("?o"), S.Const("d"))) in pre
     assert S.Atom("=", (S.Var("?g"), S.Const("gd"))) in pre
     aq2 = next(k for k, v in c.free.items() if v == "aq2")
-    guard = S.Imply(S.Atom(BOUND, (S.Const(aq2),)), S.Atom(ASSIGNED, (S.Const(aq2), S.Var("?aq"))))
-    assert guard in pre
+    # aq2 is first used by step 1, which binds it; step 2 requires the bound value.
+    move = c.domain.actions[0]
+    assert S.Atom(ASSIGNED, (S.Const(aq2), S.Var("?q2"))) in S.conjuncts(move.effect)
+    assert S.Atom(ASSIGNED, (S.Const(aq2), S.Var("?aq"))) in pre
+    assert not any(isinstance(f, (S.Or, S.Imply)) for f in pre)  # no disjunction to split
     assert S.Atom("ssr-applied-2") in S.conjuncts(c.problem.goal)
 
 
