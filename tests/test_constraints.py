@@ -117,6 +117,13 @@ def test_constants_and_order_and_last_step_are_required():
     d, p, c = _constrained()
     with pytest.raises(PlanInvalid):  # another object than the constant d
         plan_preimage(c.domain, c.problem, [("pick-step2", ("e", "pe", "ge", "bq1", "aq0"))])
+    # A step applied twice: the chain consumed its marker (the motion back exists here).
+    back = replace(c.problem, init=c.problem.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq0")))),))
+    twice = [("move-step1", ("arm", "aq0", "at5", "aq7")), ("move-step1", ("arm", "aq7", "at5", "aq0"))]
+    with pytest.raises(PlanInvalid, match="goal"):  # one application: applicable
+        plan_preimage(c.domain, back, twice[:1])
+    with pytest.raises(PlanInvalid, match="step 2"):
+        plan_preimage(c.domain, back, twice)
     with pytest.raises(PlanInvalid):  # step 2 without step 1 (ssr-applied-1)
         plan_preimage(c.domain, c.problem, [("pick-step2", ("d", "p9", "gd", "bq1", "aq8"))])
     # Holding d some other way does not reach the goal without ssr-applied-2.

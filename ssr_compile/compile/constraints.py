@@ -4,7 +4,11 @@ Given the unexecuted tail of the last plan and which of its argument values are 
 (objects, grasps: values still meaningful after new observations), build a domain whose only
 actions are one copy per plan step, so the next plan keeps the old plan's structure:
 
-* step ``i >= 2`` requires ``(applied-(i-1))`` and adds ``(applied-i)`` (total order);
+* step ``i`` requires ``(applied-(i-1))``, deletes it and adds ``(applied-i)`` (a chain: each
+  step is applied exactly once, in order; ``(applied-0)`` holds initially).  The paper only
+  needs the order; deleting the previous marker also forbids repeating a step, which a
+  planner's search would otherwise explore: on a kitchen replan with six free base motions
+  the search ran past 60 s where the chain takes 23 expansions;
 * a constant argument ``v`` at parameter ``?p`` adds ``(= ?p v)``;
 * any other value ``v`` becomes a free-variable object ``@v`` (here ``free-k``).  The steps
   are totally ordered, so the first step that uses ``v`` is known when compiling: it binds
@@ -73,10 +77,8 @@ def constrain_plan(
             raise UnsupportedError(
                 f"plan step {i}: '{name}' takes {len(schema.parameters)} arguments, got {len(args)}"
             )
-        pre: list[S.Formula] = []
-        eff: list[S.Formula] = [applied(i)]
-        if i >= 2:
-            pre.append(applied(i - 1))
+        pre: list[S.Formula] = [applied(i - 1)]
+        eff: list[S.Formula] = [applied(i), S.Not(applied(i - 1))]
         binding_here: dict[str, S.Var] = {}  # free values this step binds -> first parameter
         for value, param in zip(args, schema.parameters):
             p = S.Var(param.name)
@@ -104,7 +106,7 @@ def constrain_plan(
     predicates = list(domain.predicates) + [
         S.PredicateDecl(ASSIGNED, (S.Typed("?v"), S.Typed("?x"))),
     ]
-    predicates += [S.PredicateDecl(applied(i).pred) for i in range(1, n + 1)]
+    predicates += [S.PredicateDecl(applied(i).pred) for i in range(0, n + 1)]
     requirements = domain.requirements
     if requirements is not None:
         extra = [
@@ -130,6 +132,7 @@ def constrain_plan(
     new_problem = replace(
         problem,
         objects=kept,
+        init=problem.init + (applied(0),),
         goal=conj(problem.goal, applied(n)),
     )
     return Constrained(new_domain, new_problem, steps, {v: k for k, v in free.items()})
