@@ -127,6 +127,19 @@ def atoms(f) -> list[S.Atom]:
     return [x for x in S.walk(f) if isinstance(x, S.Atom)]
 
 
+def changed_atoms(effect) -> list[S.Atom]:
+    """The atoms an effect adds or deletes (in order): a ``when``'s condition only reads."""
+    if isinstance(effect, S.And):
+        return [a for e in effect.args for a in changed_atoms(e)]
+    if isinstance(effect, S.Forall):
+        return changed_atoms(effect.body)
+    if isinstance(effect, S.When):
+        return changed_atoms(effect.effect)
+    if isinstance(effect, S.Not):
+        return changed_atoms(effect.arg)
+    return [effect] if isinstance(effect, S.Atom) else []
+
+
 # ---------------------------------------------------------------- formulas
 
 
@@ -418,7 +431,7 @@ def check_domain(
         scope = frozenset(p.name for p in a.parameters)
         fc.formula(a.precondition, scope, f"the precondition of {where}")
         fc.formula(a.effect, scope, f"the effect of {where}", effect=True)
-        for atom in atoms(a.effect):
+        for atom in changed_atoms(a.effect):
             if atom.pred in derived_heads:
                 report.error(
                     f"the effect of {where} changes derived predicate '{atom.pred}'", atom.span

@@ -309,3 +309,18 @@ def test_stream_file_alone_judges_arity_consistency():
     report = check_streams(parse_text(text), None, filename="s.pddl", source=text)
     assert [(e.line, e.col) for e in report.errors] == [(2, 68)]
     assert "'p' takes 1 argument, found 2" in report.errors[0].message
+
+
+def test_a_derived_predicate_may_be_read_in_a_conditional_effect():
+    # Only what an effect adds or deletes "changes" a predicate: a `when` condition reads it
+    # (the kitchen's press-on cooks what is derived to be on the stove).
+    text = """(define (domain d) (:requirements :strips :derived-predicates :conditional-effects)
+      (:predicates (at ?x ?s) (hot) (cooked ?x) (on ?x))
+      (:derived (on ?x) (at ?x stove))
+      (:action press :parameters ()
+        :effect (and (hot) (forall (?o) (when (on ?o) (cooked ?o))))))"""
+    errors = [str(e) for e in check_domain(parse_text(text, "d.pddl")).errors]
+    assert not any("derived" in e for e in errors), errors
+    bad = text.replace("(cooked ?o)))))", "(on ?o)))))")
+    errors = [str(e) for e in check_domain(parse_text(bad, "d.pddl")).errors]
+    assert any("changes derived predicate 'on'" in e for e in errors), errors

@@ -122,14 +122,15 @@
                  (atconf arm ?aq2) (not (atconf arm ?aq1))
                  (increase (total-cost) 1)))
 
-  ; turning the stove on cooks what the robot believes is on it
+  ; turning the stove on cooks what the robot believes is on it (the derived ``on``: one
+  ; quantified variable, not two -- a translator enumerates every object for each variable of
+  ; a universal effect, so (forall (?o ?pb) ...) cost it the square of the objects)
   (:action press-on
     :parameters (?bq ?aq ?t)
     :precondition (and (presskin ?bq ?aq ?t) (not (stoveon)) (handempty)
                        (atconf base ?bq) (atconf arm ?aq))
     :effect (and (stoveon)
-                 (forall (?o ?pb)
-                   (when (and (atposeb ?o ?pb) (beliefon ?o ?pb stove)) (cooked ?o)))
+                 (forall (?o) (when (on ?o stove) (cooked ?o)))
                  (increase (total-cost) 1)))
 
   (:action press-off
