@@ -264,7 +264,7 @@ def state_problem(
             continue
         belief = known.beliefs[o]
         pb = obj(belief_name(o), belief)
-        init += [_atom("poseb", o, pb), _atom("atposeb", o, pb)]
+        init += [_atom("poseb", o, pb), _atom("atposeb", o, pb), _atom("current", o, pb)]
         probs = belief.surface_probs()
         if is_localized(belief):  # (no detecting it again: observing a localized object
             # again gains nothing a plan needs, and its observations, posteriors and

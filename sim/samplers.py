@@ -201,11 +201,18 @@ class KitchenStreams:
         state as it is), collision-checked; the hand may touch ``ignore_hand`` at the end."""
         w = self.world
         poses = [multiply(tool, pose((0, 0, -back * (1 - k / steps)))) for k in range(steps + 1)]
-        # Solve the goal first (many restarts), then walk back to the pre-pose from it.
-        rev = self.cartesian_path(base, poses[::-1], seed)
-        if rev is None:
-            return None
-        path = rev[::-1]
+        path = None
+        if seed is not None:
+            # The arm is at ``seed`` (acting from where it is): walk from the pre-pose, solved
+            # from the seed itself, to the goal, so the path starts where the arm is.  (Solved
+            # goal-first, the redundant arm's path often starts in another posture.)
+            path = self.cartesian_path(base, poses, seed)
+        if path is None:
+            # Solve the goal first (many restarts), then walk back to the pre-pose from it.
+            rev = self.cartesian_path(base, poses[::-1], seed)
+            if rev is None:
+                return None
+            path = rev[::-1]
         w.robot.set_base(base)
         for i, q in enumerate(path):
             w.set_arm(q)

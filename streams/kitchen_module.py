@@ -25,8 +25,8 @@ import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
 from ssr_compile.sim.problem import canonical_surface, is_localized
-from ssr_compile.sim.robot import ARM_TUCK, within_reach
-from ssr_compile.sim.samplers import Grasp, KitchenStreams, ObjPose
+from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
+from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
 from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
 
@@ -50,6 +50,7 @@ RETRIES = 3  # random IK restarts may miss: a function stream tries this often b
 MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
 FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
 MIN_SIDE_GRASP_HALF_HEIGHT = 0.04  # m: a side grasp of a shorter object hits its support
+PLACE_HERE_REACH = 0.85  # m from the arm's mount: placements sampled from where the robot is
 SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
 
 
@@ -191,6 +192,51 @@ class KitchenModule:
     def inv_kin_from(self, o: str, pb: PoseBelief, g: Grasp, bq, aq, s: str):
         path = self._kin(o, pb, g, bq, aq)
         return None if path is None else (path,)
+
+    def sample_placement_here(self, o: str, s: str, g: Grasp, bq):
+        """Placements of ``o`` on ``s`` that the arm reaches from the reached base ``bq`` with
+        grasp ``g`` (placement and approach sampled together, in reach only: a placement
+        sampled over the whole surface and then tried from here almost always fails)."""
+        w = self.world
+        sr = w.surfaces[s]
+        mount = np.asarray(mount_position(bq), float)
+        for _ in range(self.ks.max_attempts):
+            with self.planning(s if s in DRAWERS else None):
+                frame = w.surface_frame(s)
+                x = self.rng.uniform(sr.lo[0], sr.hi[0])
+                y = self.rng.uniform(sr.lo[1], sr.hi[1])
+                yaw = self.rng.uniform(-math.pi, math.pi)
+                p = ObjPose(o, s, w.rest_pose(o, s, x, y, yaw))
+                point = multiply(frame, p.rel)[0]
+                if np.linalg.norm(np.subtract(point, mount)) > PLACE_HERE_REACH:
+                    continue
+                if not self.ks.placement_valid(p):
+                    continue
+            pb = self.belief_of(p)
+            path = self._kin(o, pb, g, bq)
+            if path is not None:
+                yield (pb, ArmConf(path[0]), path)
+
+    def place_from(self, o: str, g: Grasp, bq, aq, s: str):
+        """Where the held ``o`` lands on ``s`` when the hand goes down its approach from the arm
+        configuration ``aq`` the robot is in (the end of an arm motion planned for a placement
+        that a replan no longer knows): that placement and the approach from ``aq``."""
+        w = self.world
+        with self.planning(s if s in DRAWERS else None):
+            pre = w.robot.forward_kinematics(bq, aq)
+            obj = multiply(multiply(pre, pose((0.0, 0.0, APPROACH))), g.pose)
+            rel = multiply(invert(w.surface_frame(s)), obj)
+            (x, y, _), q = rel
+            up = 1.0 - 2.0 * (q[0] ** 2 + q[1] ** 2)  # z of the object's z axis
+            if up < math.cos(math.radians(10.0)):
+                return None  # not upright: no stable placement from here
+            yaw = math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2))
+            p = ObjPose(o, s, w.rest_pose(o, s, x, y, yaw))
+            if not self.ks.placement_valid(p):
+                return None
+        pb = self.belief_of(p)
+        path = self._kin(o, pb, g, bq, aq)
+        return None if path is None else (pb, path)
 
     def plan_base_motion(self, q1, q2):
         with self.planning():
@@ -340,6 +386,8 @@ class KitchenModule:
             "plan-push-here": self._plan_drawer,
             "plan-press-here": self.plan_press,
             "inv-kin-from": self.inv_kin_from,
+            "sample-placement-here": self.sample_placement_here,
+            "place-from": self.place_from,
             "plan-pull-from": self._plan_drawer_from,
             "plan-push-from": self._plan_drawer_from,
             "plan-press-from": self.plan_press_from,
@@ -369,6 +417,8 @@ STREAM_INFO = {
     "plan-push-here": StreamInfo(kind="function", p_success=0.5, cost=0.5),
     "plan-press-here": StreamInfo(kind="function", p_success=0.5, cost=0.3),
     "inv-kin-from": StreamInfo(kind="function", p_success=0.5, cost=0.5),
+    "sample-placement-here": StreamInfo(p_success=0.5, cost=0.5),
+    "place-from": StreamInfo(kind="function", p_success=0.5, cost=0.3),
     "plan-pull-from": StreamInfo(kind="function", p_success=0.5, cost=0.5),
     "plan-push-from": StreamInfo(kind="function", p_success=0.5, cost=0.5),
     "plan-press-from": StreamInfo(kind="function", p_success=0.5, cost=0.3),

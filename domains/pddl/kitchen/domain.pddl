@@ -16,6 +16,7 @@
     (reached ?q)                      ; the robot is at configuration ?q (base, arm)
     (near ?bq ?x)                     ; at reached base ?bq the arm may reach surface/drawer ?x
     (possible ?o ?pb ?s)              ; prior belief ?pb may put ?o on ?s (sample-obs there)
+    (current ?o ?pb)                  ; ?pb is ?o's belief now (not a placement to come)
     ; static: certified by streams
     (conf ?r ?q) (traj ?r ?t) (poseb ?o ?pb) (grasp ?o ?g)
     (localized ?o ?pb)                ; ?pb is precise enough to grasp from

@@ -77,8 +77,8 @@
   ; would be tried from there, and fail)
   (:stream inv-kin-here
     :inputs (?o ?pb ?g ?bq ?s)
-    :domain (and (localized ?o ?pb) (beliefon ?o ?pb ?s) (grasp ?o ?g) (conf base ?bq)
-                 (reached ?bq) (near ?bq ?s))
+    :domain (and (localized ?o ?pb) (current ?o ?pb) (beliefon ?o ?pb ?s) (grasp ?o ?g)
+                 (conf base ?bq) (reached ?bq) (near ?bq ?s))
     :outputs (?aq ?t)
     :certified (and (conf arm ?aq) (traj arm ?t) (reach ?bq ?aq) (kin ?o ?pb ?g ?bq ?aq ?t)))
   (:stream plan-pull-here
@@ -102,10 +102,26 @@
   ; starts there, no arm motion first
   (:stream inv-kin-from
     :inputs (?o ?pb ?g ?bq ?aq ?s)
-    :domain (and (localized ?o ?pb) (beliefon ?o ?pb ?s) (grasp ?o ?g) (reached ?bq)
-                 (near ?bq ?s) (conf arm ?aq) (reached ?aq))
+    :domain (and (localized ?o ?pb) (current ?o ?pb) (beliefon ?o ?pb ?s) (grasp ?o ?g)
+                 (reached ?bq) (near ?bq ?s) (conf arm ?aq) (reached ?aq))
     :outputs (?t)
     :certified (and (traj arm ?t) (kin ?o ?pb ?g ?bq ?aq ?t)))
+;   inv-kin-here and inv-kin-from pick an object from where it is now (``current``); a
+  ; placement from here is sampled in reach with its approach (sample-placement-here), or is
+  ; where the held object lands from the arm configuration the robot is in (place-from)
+  (:stream sample-placement-here
+    :inputs (?o ?s ?g ?bq)
+    :domain (and (placeable ?o ?s) (grasp ?o ?g) (conf base ?bq) (reached ?bq) (near ?bq ?s))
+    :outputs (?pb ?aq ?t)
+    :certified (and (poseb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s) (conf arm ?aq)
+                    (traj arm ?t) (reach ?bq ?aq) (kin ?o ?pb ?g ?bq ?aq ?t)))
+  (:stream place-from
+    :inputs (?o ?g ?bq ?aq ?s)
+    :domain (and (placeable ?o ?s) (grasp ?o ?g) (reached ?bq) (near ?bq ?s) (conf arm ?aq)
+                 (reached ?aq))
+    :outputs (?pb ?t)
+    :certified (and (poseb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s) (traj arm ?t)
+                    (kin ?o ?pb ?g ?bq ?aq ?t)))
   (:stream plan-pull-from
     :inputs (?d ?a1 ?a2 ?bq ?aq1)
     :domain (and (reached ?bq) (near ?bq ?d) (conf arm ?aq1) (reached ?aq1) (closed ?d ?a1)
