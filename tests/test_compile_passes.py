@@ -69,14 +69,7 @@ STREAMS = """
     :outputs (?d)
     :certified (doorof ?r ?d)))
 """
-STRIPS = Capabilities(
-    costs=False,
-    axioms=False,
-    negative_preconditions=False,
-    disjunction=False,
-    quantifiers=False,
-    conditional_effects=False,
-)
+STRIPS = Capabilities(**dict.fromkeys(Capabilities().as_dict(), False))  # every feature off
 
 
 def _task():

@@ -16,6 +16,7 @@ pass with the common contract (:class:`~.result.PassResult`):
   equality with constants substituted into the action (its parameter disappears)
   (:mod:`.negations`);
 * costs -> unit costs (else integer costs, scaled and rounded up) (:mod:`.costs`);
+* requirements -> the flags the task really uses (:func:`requirements_of`);
 * names -> renamed where a reader would refuse them (an action named like a predicate, ``@x``)
   (:mod:`.rename`).
 
