@@ -22,8 +22,8 @@ import itertools
 import math
 import sys
 import time
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Container, Iterable, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from . import syntax as S
@@ -273,6 +273,61 @@ def order_stream_plan(
     return out
 
 
+@dataclass
+class ReplanState:
+    """What one replanning call inherits from the last (paper Algorithm 1: ``a_prev``, and
+    ``f_prev``; the solver's own memory of what it already evaluated).
+
+    ``tail``: the unexecuted actions of the last plan (object names), whose structure the next
+    plan keeps (Algorithm 2); ``constants``: the names that are constants in the sense of §VI-A
+    (anything that answers ``name in constants``); ``kept_facts``: ``ConstantFacts(f)``, the
+    certificate's static facts over constants only; ``kept_values``: the Python values of the
+    constants those facts name that are not objects of the next problem (stream outputs such as
+    grasps); ``evaluated``: real stream results kept from earlier calls; ``values``: the table
+    of the objects' names and Python values those results use (``None``: a new table).
+    """
+
+    tail: list[tuple[str, tuple[str, ...]]] | None = None
+    constants: Container[str] = frozenset()
+    kept_facts: tuple[S.Atom, ...] = ()
+    kept_values: dict[str, Any] = field(default_factory=dict)
+    evaluated: Sequence[Result] = ()
+    values: ValueTable | None = None
+
+    def is_constant(self, name: str) -> bool:
+        return name in self.constants
+
+
+class _Satisfying:
+    """The names a test accepts, as a container (``is_constant`` callables of older callers)."""
+
+    def __init__(self, test: Callable[[str], bool]):
+        self.test = test
+
+    def __contains__(self, name: object) -> bool:
+        return bool(self.test(name))
+
+
+def with_kept(
+    problem: S.Problem, module: StreamsModule, state: ReplanState
+) -> tuple[S.Problem, StreamsModule]:
+    """``s ∪ f_prev``: the problem with the kept constant facts and their objects added (and the
+    objects' Python values in the module)."""
+    if not state.kept_facts:
+        return problem, module
+    declared = {o.name for o in problem.objects}
+    clash = [n for n in state.kept_values if n in declared]
+    values = {k: v for k, v in state.kept_values.items() if k not in clash}
+    extra = tuple(S.Typed(n) for n in values if n not in declared)
+    present = set(problem.init)
+    facts = tuple(
+        f for f in state.kept_facts if f not in present and not any(a.name in clash for a in f.args)
+    )
+    new_problem = replace(problem, objects=problem.objects + extra, init=problem.init + facts)
+    new_module = replace(module, values={**module.values, **values})
+    return new_problem, new_module
+
+
 def solve(
     domain: S.Domain,
     streams: S.StreamFile,
@@ -293,11 +348,15 @@ def solve(
     unit_cost: bool = False,
     eager_cost: float = EAGER_COST,
     share: bool = False,
+    state: ReplanState | None = None,
 ) -> Solution:
     """Solve a PDDLStream problem with the Focused algorithm (see the module docstring).
 
-    ``evaluated`` are real results kept from earlier calls (replanning, Algorithm 1);
-    ``plan_tail``/``is_constant`` constrain the plan's structure (Algorithm 2).
+    ``state`` is what a replanning call inherits from the last (Algorithm 1,
+    :class:`ReplanState`): its kept facts join the problem (``s ∪ f_prev``), its tail and
+    constants constrain the plan's structure (Algorithm 2), its evaluated results and values
+    table are kept.  ``plan_tail``, ``is_constant``, ``evaluated`` and ``values`` are the same
+    state given one by one (each, when given, takes the place of the state's field).
     Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
     soon as their arguments are real (before planning), so the planner sees their real
     values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
@@ -307,146 +366,246 @@ def solve(
     object); off by default, as it is not faster on the shipped examples yet.
     Returns a :class:`Solution` with status "solved", "unsolvable" or "timeout".
     """
-    from .planners import get_planner
+    state = _inherited(state, plan_tail, is_constant, evaluated, values)
+    problem, module = with_kept(problem, module, state)
+    loop = _FocusedLoop(
+        domain,
+        streams,
+        problem,
+        module,
+        state,
+        planner=planner,
+        time_limit=time_limit,
+        max_cost=max_cost,
+        defer=defer,
+        level=max(initial_level, 0),
+        max_level=max_level,
+        progress=progress,
+        unit_cost=unit_cost,
+        eager_cost=eager_cost,
+        share=share,
+    )
+    return loop.run()
 
-    start = time.monotonic()
-    deadline = start + time_limit
-    backend = get_planner(planner) if isinstance(planner, str) else planner
-    module.check_against(streams)
-    stats = Statistics()
-    taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
-    if values is None:
-        values = ValueTable(module.values, taken)
-    ev = _Evaluation(streams, module, values, stats)
-    ev.results.extend(evaluated)
-    say = progress or (lambda msg: None)
-    optimistic_values = {
-        f.name: module.info_for(f.name).optimistic_value
-        for f in streams.functions
-        if module.info_for(f.name).optimistic_value is not None
-    }
-    level = max(initial_level, 0)
-    best_failure = "no plan"
-    eager_seen = -1  # number of real results when cheap functions were last evaluated
-    eager = {
-        f.name
-        for f in streams.functions
-        if module.info_for(f.name).cost <= eager_cost
-    }
 
-    def finish(status, plan=None, cost=None, certificate=(), deferred=(), message=""):
-        stats.total_time = time.monotonic() - start
+def _inherited(state, plan_tail, is_constant, evaluated, values) -> ReplanState:
+    """The replanning state of one call: ``state`` with the fields given one by one."""
+    state = state or ReplanState()
+    given: dict[str, Any] = {}
+    if plan_tail is not None:
+        given["tail"] = plan_tail
+    if is_constant is not None:
+        given["constants"] = _Satisfying(is_constant)
+    if evaluated:
+        given["evaluated"] = evaluated
+    if values is not None:
+        given["values"] = values
+    return replace(state, **given) if given else state
+
+
+class _FocusedLoop:
+    """One call of :func:`solve`: the Focused loop and what it keeps between iterations."""
+
+    def __init__(
+        self,
+        domain: S.Domain,
+        streams: S.StreamFile,
+        problem: S.Problem,
+        module: StreamsModule,
+        state: ReplanState,
+        *,
+        planner,
+        time_limit: float,
+        max_cost: float,
+        defer: bool,
+        level: int,
+        max_level: int,
+        progress: Callable[[str], None] | None,
+        unit_cost: bool,
+        eager_cost: float,
+        share: bool,
+    ):
+        from .planners import get_planner
+
+        self.start = time.monotonic()
+        self.deadline = self.start + time_limit
+        self.time_limit, self.max_cost, self.defer = time_limit, max_cost, defer
+        self.max_level, self.unit_cost, self.share = max_level, unit_cost, share
+        self.domain, self.streams, self.problem, self.module = domain, streams, problem, module
+        self.state = state
+        self.backend = get_planner(planner) if isinstance(planner, str) else planner
+        module.check_against(streams)
+        self.stats = Statistics()
+        self.values = state.values
+        if self.values is None:
+            taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
+            self.values = ValueTable(module.values, taken)
+        self.ev = _Evaluation(streams, module, self.values, self.stats)
+        self.ev.results.extend(state.evaluated)
+        self.say = progress or (lambda msg: None)
+        self.optimistic_values = {
+            f.name: module.info_for(f.name).optimistic_value
+            for f in streams.functions
+            if module.info_for(f.name).optimistic_value is not None
+        }
+        self.level = level
+        self.best_failure = "no plan"
+        self.eager_seen = -1  # number of real results when cheap functions were last evaluated
+        self.eager = {
+            f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
+        }
+
+    def run(self) -> Solution:
+        """Compile, plan, evaluate the stream plan; until a plan's facts are all real, no plan
+        is left up to the last level, or time is up."""
+        while True:
+            if time.monotonic() >= self.deadline:
+                return self.finish(
+                    "timeout", message=f"time limit of {self.time_limit:g} s reached"
+                )
+            self.stats.iterations += 1
+            self.stats.levels.append(self.level)
+            self.evaluate_cheap_functions()
+            compiled = self.compile()
+            result, bound = self.plan(compiled)
+            if result.status == "error":
+                raise PlannerFailure(self.backend.name, result.message, detail=result.detail)
+            if result.status == "timeout":
+                return self.finish(
+                    "timeout", message=f"the planner ran out of time at level {self.level}"
+                )
+            if result.status != "solved":
+                done = self.raise_level(result, bound)
+            else:
+                done = self.use_plan(compiled, result)
+            if done is not None:
+                return done
+
+    def finish(self, status, plan=None, cost=None, certificate=(), deferred=(), message=""):
+        self.stats.total_time = time.monotonic() - self.start
         sol = Solution(
             status,
             plan,
             cost,
             list(certificate),
-            stats,
+            self.stats,
             list(deferred),
-            list(ev.results),
-            values,
+            list(self.ev.results),
+            self.values,
             message,
         )
-        if problem.metric is not None and not backend.capabilities.costs:
-            sol.costs_ignored_by = backend.name
+        if self.problem.metric is not None and not self.backend.capabilities.costs:
+            sol.costs_ignored_by = self.backend.name
         return sol
 
-    while True:
-        if time.monotonic() >= deadline:
-            return finish("timeout", message=f"time limit of {time_limit:g} s reached")
-        stats.iterations += 1
-        stats.levels.append(level)
-        def compile_now():
-            return compile_problem(
-                domain,
-                streams,
-                problem,
-                caps=backend.capabilities,
-                level=level,
-                evaluated=ev.results,
-                disabled=ev.tried,
-                exhausted=ev.exhausted,
-                function_values=optimistic_values,
-                real_function_values=ev.real_functions,
-                plan_tail=plan_tail,
-                is_constant=is_constant,
-                unit_cost=unit_cost,
-                share=share,
-            )
+    def evaluate_cheap_functions(self) -> None:
+        """The cheap cost functions over real arguments, once per new real result."""
+        if self.eager and len(self.ev.results) != self.eager_seen:
+            self.eager_seen = len(self.ev.results)
+            _evaluate_eagerly(self.streams, self.problem, self.eager, self.ev)
 
-        if eager and len(ev.results) != eager_seen:
-            eager_seen = len(ev.results)
-            _evaluate_eagerly(streams, problem, eager, ev)
+    def compile(self):
+        """The optimistic problem of this level, constrained by the inherited plan tail."""
         started = time.perf_counter()
-        compiled = compile_now()
-        stats.compile_time += time.perf_counter() - started
-        remaining = deadline - time.monotonic()
-        bound = None if math.isinf(max_cost) else max_cost * compiled.scale
-        result = backend.solve(
+        compiled = compile_problem(
+            self.domain,
+            self.streams,
+            self.problem,
+            caps=self.backend.capabilities,
+            level=self.level,
+            evaluated=self.ev.results,
+            disabled=self.ev.tried,
+            exhausted=self.ev.exhausted,
+            function_values=self.optimistic_values,
+            real_function_values=self.ev.real_functions,
+            plan_tail=self.state.tail,
+            is_constant=self.state.is_constant,
+            unit_cost=self.unit_cost,
+            share=self.share,
+        )
+        self.stats.compile_time += time.perf_counter() - started
+        return compiled
+
+    def plan(self, compiled):
+        """The backend's answer on the compiled problem (within the time left and the cost
+        bound, in planner units), and that bound."""
+        remaining = self.deadline - time.monotonic()
+        bound = None if math.isinf(self.max_cost) else self.max_cost * compiled.scale
+        result = self.backend.solve(
             compiled.domain, compiled.problem, time_limit=max(remaining, 0.01), cost_bound=bound
         )
-        stats.planner_calls += 1
-        stats.planner_time += result.time
-        size = _size(compiled.problem, getattr(backend, "last_operators", None))
-        stats.sizes.append(size)
-        say(
-            f"iteration {stats.iterations}: level {level}, problem {size[0]} objects, "
+        self.stats.planner_calls += 1
+        self.stats.planner_time += result.time
+        size = _size(compiled.problem, getattr(self.backend, "last_operators", None))
+        self.stats.sizes.append(size)
+        self.say(
+            f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects, "
             f"{size[1]} facts, {size[2]} values"
             + (f", {size[3]} ground actions" if size[3] is not None else "")
             + f"; planner {result.status} in {result.time:.3f} s"
         )
-        if result.status == "error":
-            raise PlannerFailure(backend.name, result.message, detail=result.detail)
-        if result.status == "timeout":
-            return finish("timeout", message=f"the planner ran out of time at level {level}")
-        if result.status != "solved":
-            if result.message:
-                best_failure = result.message
-            if level >= max_level:
-                why = "under the cost bound " if bound is not None else ""
-                took = time.monotonic() - start  # a level cut-off proves nothing: not "unsolvable"
-                return finish(
-                    "unsolvable",
-                    message=f"no plan found {why}up to level {max_level} in {took:.1f} s ({best_failure})",
-                )
-            level += 1
-            ev.tried.clear()  # failed instances may be retried at the higher level
-            continue
+        return result, bound
+
+    def raise_level(self, result, bound) -> Solution | None:
+        """No plan at this level: the next level (failed instances may be retried there), or
+        "unsolvable" after the last."""
+        if result.message:
+            self.best_failure = result.message
+        if self.level >= self.max_level:
+            why = "under the cost bound " if bound is not None else ""
+            took = time.monotonic() - self.start  # a level cut-off proves nothing: not "unsolvable"
+            return self.finish(
+                "unsolvable",
+                message=f"no plan found {why}up to level {self.max_level} in {took:.1f} s "
+                f"({self.best_failure})",
+            )
+        self.level += 1
+        self.ev.tried.clear()
+        return None
+
+    def use_plan(self, compiled, result) -> Solution | None:
+        """A plan: a solution when it needs no optimistic result (or only deferred ones), else
+        its stream plan is evaluated (``None``: plan again)."""
         plan = compiled.map_plan(result.actions or [])
         pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
-        needed = stream_plan(compiled.instantiation, pre, plan) if compiled.instantiation else []
+        inst = compiled.instantiation
+        needed = stream_plan(inst, pre, plan) if inst else []
         cost = (result.cost or 0.0) / compiled.scale
         if not needed:
-            return finish(
-                SOLVED, _steps(plan, values, set()), cost, sorted(pre.static_facts, key=str)
+            return self.finish(
+                SOLVED, _steps(plan, self.values, set()), cost, sorted(pre.static_facts, key=str)
             )
-        now, later = _split_deferred(needed, pre, plan, compiled.instantiation, module, defer)
+        now, later = _split_deferred(needed, pre, plan, inst, self.module, self.defer)
         if not now:
             deferred_objs = {o for r in later for o in r.outputs}
-            return finish(
+            return self.finish(
                 SOLVED,
-                _steps(plan, values, deferred_objs),
+                _steps(plan, self.values, deferred_objs),
                 cost,
                 sorted(pre.static_facts, key=str),
                 deferred=later,
             )
-        producers = _producers(now, compiled.instantiation)
-        ordered = order_stream_plan(now, module.info_for, producers)
-        say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
+        ordered = order_stream_plan(now, self.module.info_for, _producers(now, inst))
+        self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
+        return self.evaluate_stream_plan(ordered, inst.shared)
+
+    def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:
+        """Evaluate the stream plan in order, binding optimistic objects to real values; a
+        result whose inputs or domain facts come from a failed one is skipped (``None``: plan
+        again, with the new real facts)."""
         binding: dict[str, Any] = {}  # optimistic object -> its real name
         values_of: dict[str, list[str]] = {}  # shared optimistic object -> real names
-        shared = compiled.instantiation.shared
-        facts = _RealFacts(problem, ev)
+        facts = _RealFacts(self.problem, self.ev)
         failed: set[str] = set()
         # Facts the stream plan counted on whose producer failed in this iteration: a result
         # whose domain needs one of them is not evaluated (its domain does not hold), and
         # what it would certify is unproven too.
         failed_facts: set[S.Atom] = set()
         for res in ordered:
-            if time.monotonic() >= deadline:
-                return finish(
+            if time.monotonic() >= self.deadline:
+                return self.finish(
                     "timeout",
-                    message=f"time limit of {time_limit:g} s reached while evaluating streams",
+                    message=f"time limit of {self.time_limit:g} s reached while evaluating streams",
                 )
             if any(x in failed for x in res.instance.inputs) or any(
                 f in failed_facts for f in res.domain
@@ -455,36 +614,40 @@ def solve(
                 failed_facts.update(res.certified)
                 continue
             if not shared or not any(x in shared for x in (*res.instance.inputs, *res.outputs)):
-                ok = ev.evaluate(res, binding)
-                ev.record(ok, res.instance.stream)
+                ok = self.ev.evaluate(res, binding)
+                self.ev.record(ok, res.instance.stream)
                 if not ok:
                     failed.update(res.outputs)
                     failed_facts.update(res.certified)
-                    say(f"  {res.instance} failed")
+                    self.say(f"  {res.instance} failed")
                 continue
-            # A shared object stands for every real value bound to it: evaluate the instance
-            # for each combination whose domain facts really hold.
-            inputs = res.instance.inputs
-            choices = [values_of.get(x, []) if x in shared else [binding.get(x, x)] for x in inputs]
-            any_ok = False
-            for combo in itertools.product(*choices):
-                local = dict(zip(inputs, combo))
-                if not all(facts.holds(f, local, binding) for f in res.domain):
-                    continue
-                ok = ev.evaluate(res, local)
-                ev.record(ok, res.instance.stream)
-                if not ok:
-                    say(f"  {res.instance.stream}({', '.join(combo)}) failed")
-                    continue
-                any_ok = True
-                for o in res.outputs:
-                    if o in shared:
-                        if local[o] not in values_of.setdefault(o, []):
-                            values_of[o].append(local[o])
-                    else:
-                        binding[o] = local[o]
-            if not any_ok:
+            if not self.evaluate_shared(res, shared, binding, values_of, facts):
                 failed.update(res.outputs)
+        return None
+
+    def evaluate_shared(self, res, shared, binding, values_of, facts) -> bool:
+        """A shared object stands for every real value bound to it: evaluate the instance for
+        each combination whose domain facts really hold.  True if one succeeded."""
+        inputs = res.instance.inputs
+        choices = [values_of.get(x, []) if x in shared else [binding.get(x, x)] for x in inputs]
+        any_ok = False
+        for combo in itertools.product(*choices):
+            local = dict(zip(inputs, combo))
+            if not all(facts.holds(f, local, binding) for f in res.domain):
+                continue
+            ok = self.ev.evaluate(res, local)
+            self.ev.record(ok, res.instance.stream)
+            if not ok:
+                self.say(f"  {res.instance.stream}({', '.join(combo)}) failed")
+                continue
+            any_ok = True
+            for o in res.outputs:
+                if o in shared:
+                    if local[o] not in values_of.setdefault(o, []):
+                        values_of[o].append(local[o])
+                else:
+                    binding[o] = local[o]
+        return any_ok
 
 
 class _RealFacts:

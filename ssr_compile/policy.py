@@ -12,7 +12,8 @@ Each cycle:
 4. no plan: failure; an empty plan: the goal belief is reached;
 5. otherwise EXECUTE the first action in the :class:`Environment`, receive its observation,
    UPDATE the belief, keep ``ConstantFacts(f)`` (the certificate's static facts over
-   constants only) and the unexecuted tail, and repeat.
+   constants only) and the unexecuted tail -- the solver's :class:`~ssr_compile.focused.ReplanState`,
+   which the next constrained attempt hands it -- and repeat.
 
 PLAN is the Focused solver (:func:`ssr_compile.focused.solve`); with deferral (§VII) it leaves
 the deferrable streams the first action does not need optimistic, and they stay so until a
@@ -30,12 +31,12 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .errors import TimeLimitReached
-from .focused import Solution, Step, solve
+from .focused import ReplanState, Solution, Step, solve, with_kept
 from .limits import overrunning_stream, time_limit
 from .stream import StreamsModule
 
@@ -170,22 +171,6 @@ class PolicySettings:
 
 
 @dataclass
-class ReplanState:
-    """What one replanning call inherits from the last (Algorithm 1's ``f_prev``, ``a_prev``).
-
-    ``tail``: the unexecuted actions of the last plan (object names); ``constants``: which of
-    its argument names are constants; ``kept_facts``: ``ConstantFacts(f)``, the certificate's
-    static facts over constants only; ``kept_values``: the Python values of the constants
-    those facts name that are not objects of the next problem (stream outputs such as grasps).
-    """
-
-    tail: list[tuple[str, tuple[str, ...]]] | None = None
-    constants: frozenset[str] = frozenset()
-    kept_facts: tuple[S.Atom, ...] = ()
-    kept_values: dict[str, Any] = field(default_factory=dict)
-
-
-@dataclass
 class Cycle:
     """One cycle of the policy, as logged."""
 
@@ -299,23 +284,8 @@ def _stream_constants(solution: Solution, module: StreamsModule) -> set[str]:
     return out
 
 
-def _with_kept(
-    problem: S.Problem, module: StreamsModule, state: ReplanState
-) -> tuple[S.Problem, StreamsModule]:
-    """``s ∪ f_prev``: the problem with the kept constant facts and their objects added."""
-    if not state.kept_facts:
-        return problem, module
-    declared = {o.name for o in problem.objects}
-    clash = [n for n in state.kept_values if n in declared]
-    values = {k: v for k, v in state.kept_values.items() if k not in clash}
-    extra = tuple(S.Typed(n) for n in values if n not in declared)
-    present = set(problem.init)
-    facts = tuple(
-        f for f in state.kept_facts if f not in present and not any(a.name in clash for a in f.args)
-    )
-    new_problem = replace(problem, objects=problem.objects + extra, init=problem.init + facts)
-    new_module = replace(module, values={**module.values, **values})
-    return new_problem, new_module
+# ``s ∪ f_prev`` is the solver's (it owns the replanning state); the older name:
+_with_kept = with_kept
 
 
 def run_policy(
@@ -409,17 +379,15 @@ def run_policy(
 
             if settings.constraints and state.tail:
                 limit = min(settings.constrained_time, settings.budget - planning)
-                cprob, cmod = _with_kept(problem, module, state)
-                constants = state.constants | {
-                    o.name for o in cprob.objects if agent.is_constant(o.name)
-                }
+                # The constants of this attempt: those carried over (the kept values among
+                # them) and the problem's own.  The solver adds the kept facts (s ∪ f_prev).
+                own = {o.name for o in problem.objects if agent.is_constant(o.name)}
                 solution = attempt(
-                    cprob,
-                    cmod,
+                    problem,
+                    module,
                     limit,
                     "c",
-                    plan_tail=state.tail,
-                    is_constant=lambda name, c=constants: name in c,
+                    state=replace(state, constants=state.constants | own),
                 )
                 if solution.solved:
                     constrained = "held"

@@ -41,14 +41,15 @@ import numpy as np
 import pybullet as p
 
 from ssr_compile.belief.observation import (
+    BeliefParameters,
     Observation,
-    ObsRegion,
     bvis,
     obs_cost,
+    sample_obs,
     update_belief,
     visibility_mask,
 )
-from ssr_compile.belief.particles import ObservationModel, PoseBelief, Surface, update
+from ssr_compile.belief.particles import PoseBelief, Surface, update
 from ssr_compile.belief.visibility import PyBulletCamera
 from ssr_compile.belief.visibility import bodies_at as _bodies_at
 from ssr_compile.stream import StreamInfo, StreamsModule
@@ -56,12 +57,10 @@ from ssr_compile.stream import StreamInfo, StreamsModule
 # ----------------------------------------------------------------- parameters
 
 SEED = 0
-MODEL = ObservationModel(p_fn=0.1)  # sigma: 1 cm, 1 cm, 1 cm, 5 deg
-EPS = 0.1  # occlusion tolerance of an observation (paper §V-B)
-DELTA = 0.1  # radius of an observation's region X_i (paper §V-B), in metres
+# eps, delta, c (one detection), c' (a failed one: look again), p_FN = 0.1 and the detector's
+# noise (sigma: 1 cm, 1 cm, 1 cm, 5 deg): the library's defaults, as in the kitchen
+BELIEF = BeliefParameters()
 N_OBJECTS = 3  # target, box A, box B: n in eq. 2
-C_DETECT = 1.0  # c: cost of one detection
-C_RECOVER = 1.0  # c': cost of a failed detection (look again)
 LOCALIZED_STD = 0.013  # localized: x and y spread at most 1.3 cm (one spot alone: 1.7 cm)
 
 EYE = (0.0, 0.0, 1.1)
@@ -155,7 +154,7 @@ def update_belief_fn(o: str, pb1: PoseBelief, obs: Observation) -> tuple[PoseBel
     """``update-belief``: the posterior assuming the hypothesised detection (paper §IV-A)."""
     if not o == pb1.obj == obs.obj:
         return None
-    return (update_belief(o, pb1, obs, MODEL),)
+    return (update_belief(o, pb1, obs, BELIEF.model),)
 
 
 def is_localized(pb: PoseBelief) -> bool:
@@ -173,7 +172,7 @@ def obscost(o: str, pb: PoseBelief, obs: Observation) -> float | None:
     ``None`` (not applicable) when ``p = 0``."""
     if not o == pb.obj == obs.obj:
         return None
-    cost = obs_cost(obs, pb, N_OBJECTS, C_DETECT, C_RECOVER, MODEL)
+    cost = obs_cost(obs, pb, N_OBJECTS, BELIEF.c_detect, BELIEF.c_recover, BELIEF.model)
     return cost if math.isfinite(cost) else None
 
 
@@ -185,7 +184,7 @@ STREAM_INFO = {
     "sample-aside": {"cost": 0.1},
     "test-localized": {"kind": "test", "p_success": 0.5, "cost": 0.05},
     # Planned with before evaluation: c, the cheapest any detection can be (p = 1).
-    "obscost": {"optimistic_value": C_DETECT},
+    "obscost": {"optimistic_value": BELIEF.c_detect},
 }
 
 VALUES = {
@@ -219,31 +218,16 @@ class DetectStreams:
     def sample_obs(self, o: str, pb: PoseBelief) -> Iterator[tuple[Observation]]:
         """``sample-obs``: observations ``(z, X_i, eps)`` of ``o`` under ``pb`` (paper §V-B).
 
-        As :func:`ssr_compile.belief.observation.sample_obs` (``z = x_i`` for a particle ``x_i``, ``X_i`` the
-        positive-weight particles of its surface within ``DELTA``), but as a finite enumeration of
-        distinct regions, *heaviest first*: ``x_i`` is a particle whose neighbourhood holds the
-        most probability not yet covered by an earlier region (ties broken by the seeded
-        generator).  The Focused solver evaluates one output per level, so the order matters: the
-        planner first sees the observations most likely to succeed (here behind A or B, 0.45
-        each) and the visible spot (0.10) only afterwards.  Ends when every particle is covered.
+        The library's :func:`ssr_compile.belief.observation.sample_obs`, heaviest first (ties
+        broken by the seeded generator): the planner first sees the observations most likely to
+        succeed (here behind A or B, 0.45 each) and the visible spot (0.10) only afterwards.
+        Ends when every particle is covered.
         """
         if o != pb.obj:
             return
-        positive = pb.weights > 0
-        same = pb.labels[:, None] == pb.labels[None, :]
-        dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
-        near_all = (dist <= DELTA) & same & positive[None, :]
-        covered = ~positive
-        names = pb.surface_names
-        while not covered.all():
-            gain = near_all @ np.where(covered, 0.0, pb.weights)
-            gain[covered] = -1.0
-            best = np.flatnonzero(gain >= gain.max() - 1e-9)
-            i = int(self.rng.choice(best))
-            members = np.flatnonzero(near_all[i])
-            covered[members] = True
-            region = ObsRegion(str(names[i]), pb.poses[members], pb.poses[i], DELTA, members, pb.digest)
-            yield (Observation(o, pb.poses[i], region, EPS),)
+        yield from sample_obs(
+            o, pb, self.rng, delta=BELIEF.delta, eps=BELIEF.eps, heaviest_first=True
+        )
 
 
     def vis_test(self, o: str, obs: Observation, o2: str, pb2: PoseBelief) -> bool:
@@ -309,7 +293,7 @@ def _box_poses(sc: Scene, beliefs: dict[str, PoseBelief]) -> dict[int, tuple]:
 class DetectWorld:
     """The true scene: where the target really is (drawn from the prior with the episode's
     seed), where the boxes stand, and the camera that detects with false negatives and
-    Gaussian noise (:data:`MODEL`).  The robot observes by executing ``detect``."""
+    Gaussian noise (``BELIEF.model``).  The robot observes by executing ``detect``."""
 
     def __init__(self, seed: int, boxes: dict[str, tuple[float, float]]):
         self.rng = np.random.default_rng([seed, 11])
@@ -337,7 +321,7 @@ class DetectWorld:
 
     def execute(self, step) -> dict:
         if step.name == "detect":
-            z = MODEL.sample_detection(self.target, self.visible(), self.rng)
+            z = BELIEF.model.sample_detection(self.target, self.visible(), self.rng)
             return {"action": "detect", "detection": None if z is None else tuple(z)}
         if step.name == "move-aside":
             b, pb2 = step.args[0], step.values[2]
@@ -391,7 +375,7 @@ class DetectAgent:
                     pb, sc.camera, BODIES["target"].half_extents, ignore=[sc.ids["target"]]
                 )
             z = observation["detection"]
-            self._set("target", update(pb, None if z is None else np.array(z), mask, MODEL, rng=self.rng))
+            self._set("target", update(pb, None if z is None else np.array(z), mask, BELIEF.model, rng=self.rng))
             self.last = "detected" if z is not None else "missed"
         elif observation["action"] == "move-aside":
             self._set(step.args[0], step.values[2])

@@ -31,21 +31,20 @@ from ssr_compile.sim.tasks import Task
 from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
 
 from ssr_compile.belief.observation import (
+    BeliefParameters,
     Observation,
-    ObsRegion,
     obs_cost,
+    sample_obs,
     update_belief,
     visibility_lower_bound,
     visibility_mask,
 )
-from ssr_compile.belief.particles import ObservationModel, PoseBelief
+from ssr_compile.belief.particles import PoseBelief
 from ssr_compile.stream import StreamInfo, StreamsModule
 
-MODEL = ObservationModel(p_fn=0.1)
-EPS = 0.1  # occlusion tolerance of an observation (paper §V-B)
-DELTA = 0.1  # radius of an observation's region X_i, metres
-C_DETECT = 1.0  # c: one detection
-C_RECOVER = 1.0  # c': a failed detection, then look again
+BELIEF = BeliefParameters()  # paper §V: eps, delta, c, c', p_FN and noise (the library's)
+MODEL, EPS, DELTA = BELIEF.model, BELIEF.eps, BELIEF.delta
+C_DETECT, C_RECOVER = BELIEF.c_detect, BELIEF.c_recover  # c: one detection; c': a failed one
 RETRIES = 3  # random IK restarts may miss: a function stream tries this often before failing
 MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
 FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
@@ -293,27 +292,15 @@ class KitchenModule:
 
     # -- belief streams ----------------------------------------------------------------------
     def sample_obs(self, o: str, pb: PoseBelief, s: str) -> Iterator[tuple[Observation]]:
-        """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite).  Only particles
-        the fixed camera can see at all (the furniture alone, ``s`` open if it is a drawer)
-        count: a region the cabinet always hides would be detected at no real chance."""
+        """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite: the library's
+        :func:`~ssr_compile.belief.observation.sample_obs`).  Only particles the fixed camera
+        can see at all (the furniture alone, ``s`` open if it is a drawer) count: a region the
+        cabinet always hides would be detected at no real chance."""
         on = (pb.surface_names == s) & (pb.weights > 0)
         if not on.any():
             return
         on &= self._seeable(o, pb, s)
-        if not on.any():
-            return
-        dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
-        near = (dist <= DELTA) & on[None, :] & on[:, None]
-        covered = ~on
-        while not covered.all():
-            gain = near @ np.where(covered, 0.0, pb.weights)
-            gain[covered] = -1.0
-            best = np.flatnonzero(gain >= gain.max() - 1e-12)
-            i = int(self.rng.choice(best))
-            members = np.flatnonzero(near[i])
-            covered[members] = True
-            region = ObsRegion(s, pb.poses[members], pb.poses[i], DELTA, members, pb.digest)
-            yield (Observation(o, pb.poses[i], region, EPS),)
+        yield from sample_obs(o, pb, self.rng, delta=DELTA, eps=EPS, heaviest_first=True, among=on)
 
     def _seeable(self, o: str, pb: PoseBelief, s: str) -> np.ndarray:
         key = (pb.digest, s)

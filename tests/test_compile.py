@@ -57,7 +57,7 @@ def fd_solve(compiled, time_limit: float = 20.0, planner: str = "fd"):
 def with_costs(domain: S.Domain, problem: S.Problem):
     """Axioms compiled away (the validator reads none) and ``(= (total-cost) 0)`` present."""
     if domain.axioms:
-        domain, problem = compile_away(domain, problem)
+        domain, problem = compile_away(domain, problem).task
     uses_cost = any(f.name == "total-cost" for f in domain.functions)
     has_init = any(
         isinstance(f, S.InitValue) and f.fluent.name == "total-cost" for f in problem.init
@@ -380,7 +380,7 @@ def _pp_real():
 @pytest.mark.parametrize("plan, valid", [(GOOD_PLAN, True), (BAD_PLAN, False)])
 def test_derived_kept_and_compiled_away_accept_the_same_plans(plan, valid):
     d, p = _pp_real()
-    flat_d, flat_p = compile_away(d, p)
+    flat_d, flat_p = compile_away(d, p).task
     assert not flat_d.axioms and "unsafe" not in {x.name for x in flat_d.predicates}
     outcomes = []
     for dom, prob in ((d, p), (flat_d, flat_p)):

@@ -29,7 +29,7 @@ def _problem(init: str, goal: str) -> S.Problem:
 
 
 def _solvable(init: str, goal: str) -> bool:
-    d, p = compile_away(parse_domain(DOMAIN), _problem(init, goal))
+    d, p = compile_away(parse_domain(DOMAIN), _problem(init, goal)).task
     assert not d.axioms
     assert not any(isinstance(x, S.Atom) and x.pred == "reach" for x in S.walk(p.goal))
     result = get_planner("fd").solve(d, p, time_limit=20, cost_bound=None)

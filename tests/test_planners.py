@@ -133,7 +133,8 @@ def test_clashing_names_mapped_back(spec):
 
 def test_renaming_separates_namespaces_and_maps_back():
     domain, problem = load("clash", "clash")
-    dom, _, renaming = rename_task(domain, problem)
+    renamed = rename_task(domain, problem)
+    dom, renaming = renamed.domain, renamed.renaming
     names = [a.name for a in dom.actions] + [p.name for p in dom.predicates]
     names += [t.name for t in dom.types]
     assert len(names) == len(set(names))

@@ -81,10 +81,10 @@ def test_stop_answers_with_its_status():
 
 def test_unsafe_problem_name_is_renamed():
     domain, problem = _task("37")
-    _, renamed, renaming = rename_task(domain, problem)
-    assert renamed.name == "x37" and renaming
-    _, same, nothing = rename_task(*_task())
-    assert same.name == "move-1" and not nothing
+    renamed = rename_task(domain, problem)
+    assert renamed.problem.name == "x37" and renamed.renaming
+    same = rename_task(*_task())
+    assert same.problem.name == "move-1" and not same.renaming
 
 
 def test_renaming_lives_in_compile_and_backends_do_not_rename():

@@ -4,7 +4,9 @@
   :class:`Surface`), the observation model with false negatives and Gaussian noise
   (:class:`ObservationModel`), the Bayesian update with resampling and reinvigoration
   (:func:`update`);
-- ``observation``: hypothesised observations ``?obs = (z, X_i, eps)`` (:func:`sample_obs`),
+- ``observation``: the belief streams' parameters (:class:`BeliefParameters`: eps, delta, the
+  costs c and c', the observation model), hypothesised observations ``?obs = (z, X_i, eps)``
+  (:func:`sample_obs`, the ``sample-obs`` stream of every shipped domain),
   visibility of a particle neighbourhood (:func:`visibility_mask`), the lower bound ``L_j`` and
   ``BVis`` (:func:`visibility_lower_bound`, :func:`bvis`), eq. 2
   (:func:`detection_probability_bound`), ``ObsCost`` (:func:`obs_cost`) and ``update-belief``

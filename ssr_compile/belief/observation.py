@@ -1,5 +1,7 @@
 """Observation streams on pose beliefs (paper §IV-A, §V-A, §V-B, §V-C).
 
+* :class:`BeliefParameters`: a domain's ``eps``, ``delta``, costs ``c`` and ``c'``, and
+  observation model (``p_FN``, noise), in one place.
 * ``sample-obs``: :func:`sample_obs` yields hypothesised observations ``?obs = (z, X_i, eps)``.
 * ``test-vis`` / ``BVis``: :func:`visibility_lower_bound` estimates ``L_j(X_i)`` by ray casting
   and :func:`bvis` tests ``L_j(X_i) >= 1 - eps``; :func:`blocking_bodies` evaluates the derived
@@ -13,13 +15,35 @@ from __future__ import annotations
 import hashlib
 import math
 from collections.abc import Collection, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .determinize import self_loop_cost
 from .particles import ObservationModel, PoseBelief, derived_rng, update, wrap_angle
 from .visibility import Visibility, bodies_at
+
+
+@dataclass(frozen=True)
+class BeliefParameters:
+    """The parameters of a domain's belief streams (paper §V); the paper gives no numbers, and
+    the shipped domains use these defaults.
+
+    ``eps``: occlusion tolerance of an observation (§V-B); ``delta``: radius of an observation's
+    region ``X_i`` in metres (about twice the size of the kitchen's objects); ``c_detect``: the
+    cost ``c`` of one detection and ``c_recover`` the cost ``c'`` of a failed one, after which
+    the robot looks again (self-loop determinization, §V-A); ``model``: the detector's
+    false-negative probability ``p_FN`` and pose noise (:class:`ObservationModel`).
+    """
+
+    eps: float = 0.1
+    delta: float = 0.1
+    c_detect: float = 1.0
+    c_recover: float = 1.0
+    model: ObservationModel = field(default_factory=ObservationModel)
+
+
+DEFAULTS = BeliefParameters()
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -112,26 +136,65 @@ def sample_obs(
     pb: PoseBelief,
     rng: np.random.Generator,
     *,
-    delta: float = 0.1,
-    eps: float = 0.1,
+    delta: float = DEFAULTS.delta,
+    eps: float = DEFAULTS.eps,
+    heaviest_first: bool = False,
+    among: np.ndarray | None = None,
 ) -> Iterator[tuple[Observation]]:
-    """The ``sample-obs`` stream (paper §IV-A, §V-B): endless, lazy ``(obs,)`` tuples.
+    """The ``sample-obs`` stream (paper §IV-A, §V-B): lazy ``(obs,)`` tuples.
 
-    Each draws a particle ``x_i`` by weight, takes ``z = x_i`` (the determinized outcome: the
+    Each observation takes a particle ``x_i``, ``z = x_i`` (the determinized outcome: the
     object is seen where it is hypothesised) and ``X_i`` = the positive-weight particles on the
-    same surface within planar distance ``delta`` of ``x_i``.  Default ``delta = 0.1`` m, about
-    twice the size of the kitchen's objects; default ``eps = 0.1``.
+    same surface within planar distance ``delta`` of ``x_i``.  ``among`` (bool, one per
+    particle) restricts both ``x_i`` and ``X_i`` to some particles (for instance those on one
+    surface that the camera can see at all).
+
+    By default the draws are endless and ``x_i`` is drawn by weight.  With ``heaviest_first``,
+    the observations are a finite enumeration of distinct regions, heaviest first: ``x_i`` is a
+    particle whose neighbourhood holds the most probability not yet covered by an earlier
+    region (ties broken by ``rng``), and the stream ends when every particle is covered.  The
+    Focused solver evaluates one output per level, so the planner first sees the observations
+    most likely to succeed -- the order the shipped domains use.
     """
     if obj != pb.obj:
         raise ValueError(f"belief is over {pb.obj!r}, not {obj!r}")
+    on = pb.weights > 0
+    if among is not None:
+        on &= np.asarray(among, dtype=bool)
+    if not on.any():
+        return
+    if heaviest_first:
+        yield from _heaviest_first(obj, pb, rng, on, delta, eps)
+        return
+    p = pb.weights if among is None else np.where(on, pb.weights, 0.0) / pb.weights[on].sum()
     while True:
-        i = int(pb.sample_indices(rng, 1)[0])
+        i = int(rng.choice(len(pb), size=1, p=p)[0])
         near = np.linalg.norm(pb.poses[:, :2] - pb.poses[i, :2], axis=1) <= delta
-        members = np.flatnonzero(near & (pb.labels == pb.labels[i]) & (pb.weights > 0))
-        region = ObsRegion(
-            str(pb.surface_names[i]), pb.poses[members], pb.poses[i], delta, members, pb.digest
-        )
-        yield (Observation(obj, pb.poses[i], region, eps),)
+        members = np.flatnonzero(near & (pb.labels == pb.labels[i]) & on)
+        yield (_observation(obj, pb, i, members, delta, eps),)
+
+
+def _heaviest_first(obj, pb: PoseBelief, rng, on: np.ndarray, delta: float, eps: float):
+    dist = np.linalg.norm(pb.poses[:, None, :2] - pb.poses[None, :, :2], axis=2)
+    same = pb.labels[:, None] == pb.labels[None, :]
+    near = (dist <= delta) & same & on[None, :]
+    covered = ~on
+    while not covered.all():
+        gain = near @ np.where(covered, 0.0, pb.weights)
+        gain[covered] = -1.0
+        best = np.flatnonzero(gain >= gain.max() - 1e-9)
+        i = int(rng.choice(best))
+        members = np.flatnonzero(near[i])
+        covered[members] = True
+        yield (_observation(obj, pb, i, members, delta, eps),)
+
+
+def _observation(obj, pb: PoseBelief, i: int, members, delta: float, eps: float) -> Observation:
+    """``(z, X_i, eps)`` for the particle ``i`` and the region of the particles ``members``."""
+    region = ObsRegion(
+        str(pb.surface_names[i]), pb.poses[members], pb.poses[i], delta, members, pb.digest
+    )
+    return Observation(obj, pb.poses[i], region, eps)
 
 
 def box_points(poses: np.ndarray, half_extents: Sequence[float], inset: float = 0.8) -> np.ndarray:
@@ -265,13 +328,13 @@ def obs_cost(
     obs: Observation,
     pb: PoseBelief,
     n_objects: int,
-    c: float = 1.0,
-    c_fail: float = 1.0,
+    c: float = DEFAULTS.c_detect,
+    c_fail: float = DEFAULTS.c_recover,
     model: ObservationModel | None = None,
 ) -> float:
     """``ObsCost ?o ?pb ?obs`` (paper §V-A, §V-B): self-loop determinized cost
     ``c + c_fail / p - c_fail`` with ``p`` the eq. 2 bound; ``inf`` when ``p = 0``."""
-    p = detection_probability_bound(obs, pb, n_objects, (model or ObservationModel()).p_fn)
+    p = detection_probability_bound(obs, pb, n_objects, (model or DEFAULTS.model).p_fn)
     return self_loop_cost(c, c_fail, min(max(p, 0.0), 1.0))
 
 

@@ -1,4 +1,4 @@
-"""Pass 4 — plan constraints (paper §VI-A, Algorithm 2 ``ConstrainPlan``).
+"""Compile pass — plan constraints (paper §VI-A, Algorithm 2 ``ConstrainPlan``).
 
 Given the unexecuted tail of the last plan and which of its argument values are *constants*
 (objects, grasps: values still meaningful after new observations), build a domain whose only
@@ -25,11 +25,12 @@ actions are one copy per plan step, so the next plan keeps the old plan's struct
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
 from .formulas import conj
+from .result import PassResult
 
 Plan = list[tuple[str, tuple[str, ...]]]
 
@@ -41,13 +42,14 @@ def applied(i: int) -> S.Atom:
 
 
 @dataclass
-class Constrained:
-    domain: S.Domain
-    problem: S.Problem
+class Constrained(PassResult):
+    """The constraints pass's result (:func:`constrain_plan`): its map back names each step
+    copy by its action."""
+
     # new action name -> (original action name, step index)
-    steps: dict[str, tuple[str, int]]
+    steps: dict[str, tuple[str, int]] = field(default_factory=dict)
     # free-variable object -> the value it stood for in the old plan
-    free: dict[str, str]
+    free: dict[str, str] = field(default_factory=dict)
 
     def map_plan(self, plan: Plan) -> Plan:
         """A plan of the constrained problem in the original action names."""

@@ -1,14 +1,19 @@
-"""Cost handling (paper §V-A): self-loop determinization and integer scaling of costs."""
+"""Lowering pass — costs (paper §V-A): plain integer action costs, scaled from the stream
+functions' values (the self-loop determinization itself is in :mod:`ssr_compile.belief`).
+
+:func:`compile_costs` returns a :class:`Costed` result: the task with integer costs and the
+``scale`` that turns a planner's cost back into the input's units; no action is renamed, so
+plans map back unchanged.
+"""
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 
-# ---------------------------------------------------------------- the costs pass
-from dataclasses import replace  # noqa: E402
-
-from .. import syntax as S  # noqa: E402
-from ..belief.determinize import self_loop_cost  # noqa: E402,F401  (re-exported)
+from .. import syntax as S
+from ..belief.determinize import self_loop_cost  # noqa: F401  (re-exported)
+from .result import PassResult
 
 TOTAL_COST = S.FuncTerm("total-cost")
 MAX_SCALE = 1000
@@ -44,6 +49,13 @@ def cost_effects(effect) -> list[S.NumericEffect]:
     return out
 
 
+@dataclass
+class Costed(PassResult):
+    """The costs pass's result: ``scale`` planner units make one unit of the input's costs."""
+
+    scale: int = 1
+
+
 def compile_costs(
     domain: S.Domain,
     problem: S.Problem,
@@ -51,15 +63,14 @@ def compile_costs(
     cost_functions: set[str] = frozenset(),
     scale: int | None = None,
     unit_cost: bool = False,
-):
+) -> Costed:
     """Make costs plain integer action costs (paper §V-A; DESIGN §4 "Costs").
 
     ``(increase (total-cost) (F args))`` with ``F`` a stream function stays a static numeric
     fluent whose values (given in the problem's init by instantiation) are scaled to integers
     and rounded up; each such action gets a guard ``(has-cost-F args)`` true exactly where a
     finite value exists, so a planner never grounds an action whose cost is undefined.
-    Constant increments are scaled likewise.  ``unit_cost`` drops all costs instead.
-    Returns ``(domain, problem, scale)``.
+    Constant increments are scaled likewise.  ``unit_cost`` drops all costs instead (scale 1).
     """
     if unit_cost:
         actions = tuple(replace(a, effect=_drop_costs(a.effect)) for a in domain.actions)
@@ -70,7 +81,7 @@ def compile_costs(
         functions = tuple(
             f for f in domain.functions if f.name != TOTAL_COST.name and f.name in used
         )
-        return (
+        return Costed(
             replace(domain, actions=actions, functions=functions),
             replace(problem, init=init, metric=None),
             1,
@@ -147,7 +158,7 @@ def compile_costs(
         requirements=requirements,
     )
     new_problem = replace(problem, init=tuple(init), metric=S.Metric("minimize", TOTAL_COST))
-    return new_domain, new_problem, scale
+    return Costed(new_domain, new_problem, scale)
 
 
 def _function_names(actions) -> set[str]:

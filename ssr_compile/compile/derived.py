@@ -1,11 +1,13 @@
-"""Pass 2 — derived predicates (paper §IV-A: ``BOccluded``).
+"""Lowering pass — derived predicates (paper §IV-A: ``BOccluded``).
 
 Backends with axiom support (Fast Downward) keep ``:derived`` as it is.  For the others,
-non-recursive derived predicates are compiled away: every use is replaced by the disjunction
-of its axioms' bodies with the arguments substituted and the bound variables renamed apart.
-A negated use such as ``(not (BOccluded ?o ?obs))`` becomes ``(not (exists ...))``, which the
-lowering pass turns into what the backend supports.  A recursive derived predicate cannot be
-compiled this way: that is a clear :class:`UnsupportedError`.
+non-recursive derived predicates are compiled away (:func:`compile_away`): every use is
+replaced by the disjunction of its axioms' bodies with the arguments substituted and the bound
+variables renamed apart.  A negated use such as ``(not (BOccluded ?o ?obs))`` becomes
+``(not (exists ...))``, which the later lowering passes turn into what the backend supports.
+A recursive derived predicate cannot be compiled this way: that is a clear
+:class:`UnsupportedError`.  No action is renamed, so the pass's :class:`~.result.PassResult`
+maps plans back unchanged.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from .. import syntax as S
 from ..check import atoms, variables
 from ..errors import UnsupportedError
 from .formulas import conj, map_atoms, substitute, variables_in
+from .result import PassResult
 
 
 def dependencies(domain: S.Domain) -> dict[str, set[str]]:
@@ -64,13 +67,14 @@ def normalise_axiom_bodies(domain: S.Domain) -> S.Domain:
     return replace(domain, axioms=tuple(axioms))
 
 
-def compile_away(domain: S.Domain, problem: S.Problem | None = None):
+def compile_away(domain: S.Domain, problem: S.Problem | None = None) -> PassResult:
     """Remove every derived predicate by inlining its definition.
 
-    Returns ``(domain, problem)``; plans are unchanged (no action is renamed).
+    Returns the :class:`~.result.PassResult` of the task without axioms; its plans are the
+    input's plans (no action is renamed).
     """
     if not domain.axioms:
-        return domain, problem
+        return PassResult(domain, problem)
     rec = recursive_predicates(domain)
     if rec:
         ax = next(a for a in domain.axioms if a.name in rec)
@@ -123,7 +127,7 @@ def compile_away(domain: S.Domain, problem: S.Problem | None = None):
     )
     if problem is not None and problem.goal is not None:
         problem = replace(problem, goal=map_atoms(problem.goal, expand))
-    return new_domain, problem
+    return PassResult(new_domain, problem)
 
 
 def _expand_effect(effect, expand):

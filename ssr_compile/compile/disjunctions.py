@@ -1,13 +1,17 @@
-"""Lowering step: disjunctive preconditions split into one action copy per DNF clause
-(``a--1``, ``a--2``...); a disjunctive goal gets one ``ssr-goal--k`` action per clause."""
+"""Lowering pass — disjunctive preconditions split into one action copy per DNF clause
+(``a--1``, ``a--2``...); a disjunctive goal gets one ``ssr-goal--k`` action per clause.
+
+:func:`split_disjunctions` returns a :class:`Split`, whose map back names each copy by its
+action and leaves out the goal actions."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
 from .formulas import TooLarge, conj, dnf, has, nnf
+from .result import PassResult, Plan
 
 GOAL_ACTION = "ssr-goal"
 GOAL_REACHED = S.Atom("ssr-goal-reached")
@@ -16,8 +20,22 @@ GOAL_REACHED = S.Atom("ssr-goal-reached")
 # ---------------------------------------------------------------- disjunction
 
 
-def split_disjunctions(domain: S.Domain, problem: S.Problem):
-    templates: dict[str, tuple[str, tuple[int | str, ...]]] = {}
+@dataclass
+class Split(PassResult):
+    """The disjunctions pass's result: ``copies`` maps an action copy to the action it splits."""
+
+    copies: dict[str, str] = field(default_factory=dict)
+
+    def map_plan(self, plan) -> Plan:
+        return [
+            (self.copies.get(name, name), tuple(args))
+            for name, args in plan
+            if not name.startswith(GOAL_ACTION)
+        ]
+
+
+def split_disjunctions(domain: S.Domain, problem: S.Problem) -> Split:
+    copies: dict[str, str] = {}
     actions: list[S.Action] = []
     for a in domain.actions:
         if a.precondition is None or not has(
@@ -42,10 +60,9 @@ def split_disjunctions(domain: S.Domain, problem: S.Problem):
         if len(clauses) == 1:
             actions.append(replace(a, precondition=conj(*clauses[0]) if clauses[0] else S.And(())))
             continue
-        identity = tuple(range(len(a.parameters)))
         for k, clause in enumerate(clauses, start=1):
             name = f"{a.name}--{k}"
-            templates[name] = (a.name, identity)
+            copies[name] = a.name
             actions.append(
                 replace(a, name=name, precondition=conj(*clause) if clause else S.And(()))
             )
@@ -72,10 +89,10 @@ def split_disjunctions(domain: S.Domain, problem: S.Problem):
                 )
             predicates.append(S.PredicateDecl(GOAL_REACHED.pred))
             goal = GOAL_REACHED
-    return (
+    return Split(
         replace(domain, actions=tuple(actions), predicates=tuple(predicates)),
         replace(problem, goal=goal),
-        templates,
+        copies,
     )
 
 

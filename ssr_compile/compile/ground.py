@@ -1,4 +1,5 @@
-"""Grounding pass: a lifted task -> a ground task for planners without quantifiers or axioms.
+"""Lowering pass — grounding: a lifted task -> a ground task for planners without quantifiers
+or axioms.
 
 For backends that cannot take the lifted compiled output (pyperplan: STRIPS only; unified-
 planning, whose writer enumerates every grounding of every predicate over all objects), this
@@ -20,8 +21,9 @@ pass grounds the task over what can happen:
    term; an instance whose cost is undefined is not applicable and is dropped.
 
 The output keeps negation and disjunction over ground atoms; the lowering pass then splits and
-complements them as the backend needs.  :meth:`Grounded.map_plan` turns a plan of ground
-actions back into the lifted actions and their arguments.
+complements them as the backend needs.  :func:`ground` returns a :class:`Grounded` result,
+whose :meth:`~Grounded.map_plan` turns a plan of ground actions back into the lifted actions
+and their arguments.
 """
 
 from __future__ import annotations
@@ -33,9 +35,9 @@ from .. import syntax as S
 from ..errors import UnsupportedError
 from .derived import compile_away
 from .formulas import nnf
+from .result import PassResult, Plan
 
 Fact = tuple[str, tuple[str, ...]]
-Plan = list[tuple[str, tuple[str, ...]]]
 TRUE, FALSE = True, False
 MAX_GROUND_ACTIONS = 500_000
 MAX_FREE_ENUMERATION = 100_000
@@ -46,11 +48,11 @@ class GroundingTooLarge(UnsupportedError):
 
 
 @dataclass
-class Grounded:
-    domain: S.Domain
-    problem: S.Problem
+class Grounded(PassResult):
+    """The grounding pass's result."""
+
     # ground action name -> (lifted action name, arguments)
-    actions: dict[str, tuple[str, tuple[str, ...]]]
+    actions: dict[str, tuple[str, tuple[str, ...]]] = field(default_factory=dict)
     # 0-ary predicate name -> the fact it stands for
     facts: dict[str, Fact] = field(default_factory=dict)
 
@@ -479,7 +481,8 @@ def _split_conditional(grounded: Grounded) -> Grounded:
 def ground(domain: S.Domain, problem: S.Problem, *, conditional_effects: bool = True) -> Grounded:
     """Ground ``domain`` and ``problem`` over their relaxed-reachable instances; without
     ``conditional_effects``, also compile the ground conditional effects away."""
-    if domain.axioms:
-        domain, problem = compile_away(domain, problem)
+    if domain.axioms:  # inlined first (plans are unchanged by it)
+        inlined = compile_away(domain, problem)
+        domain, problem = inlined.domain, inlined.problem
     grounded = _Grounder(domain, problem).ground()
     return grounded if conditional_effects else _split_conditional(grounded)

@@ -1,13 +1,18 @@
-"""Pass 1 — optimistic stream instantiation (paper §IV, §VII; PDDLStream's Focused algorithm).
+"""Compile pass — optimistic stream instantiation (paper §IV, §VII; PDDLStream's Focused
+algorithm).
 
 From the problem's facts (plus stream results already evaluated), instantiate every stream whose
 domain holds, giving each instance fresh optimistic output objects and its certified facts;
 repeat to a fixed point bounded by a *level*: real facts have level 0, and an instance has
 level ``1 + max(levels of its domain facts)``; instances above the level limit are not made.
 Test streams are optimistically true; ``:function`` terms take an optimistic value (from the
-stream info, else the documented default :data:`DEFAULT_FUNCTION_VALUE`).  Every optimistic
-object and fact keeps the stream instance that produced it, so a plan over the compiled
-problem can be traced back to the stream instances it relies on (its stream plan).
+stream info, else the documented default :data:`DEFAULT_FUNCTION_VALUE`).
+
+:func:`instantiate` returns an :class:`Instantiation`: the domain (with the predicates only the
+stream file declares) and the optimistic problem, and the provenance of every optimistic object
+and fact -- the stream instance that produced it -- so a plan over the compiled problem can be
+traced back to the stream instances it relies on (its stream plan).  Actions are untouched, so
+plans map back unchanged.
 """
 
 from __future__ import annotations
@@ -18,7 +23,9 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
+from ..check import atoms
 from ..errors import UnsupportedError
+from .result import PassResult
 
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
 # because planners need strictly positive action costs to make progress (paper §III: c_a > 0).
@@ -53,11 +60,11 @@ class Result:
 
 
 @dataclass
-class Instantiation:
-    """The optimistic problem and where each of its objects and facts came from."""
+class Instantiation(PassResult):
+    """The instantiation pass's result: the optimistic problem and where each of its objects
+    and facts came from."""
 
-    problem: S.Problem
-    results: list[Result]
+    results: list[Result] = field(default_factory=list)
     # optimistic object name -> the result that makes it
     objects: dict[str, Result] = field(default_factory=dict)
     # certified fact -> the optimistic result(s) that certify it (real facts are absent)
@@ -71,6 +78,30 @@ class Instantiation:
 
     def optimistic_objects(self) -> set[str]:
         return set(self.objects)
+
+
+def declare_stream_predicates(domain: S.Domain, streams: S.StreamFile | None) -> S.Domain:
+    """Declare, in the domain, the predicates that only the stream file mentions."""
+    if streams is None:
+        return domain
+    declared = {p.name for p in domain.predicates} | {ax.name for ax in domain.axioms}
+    extra: dict[str, int] = {}
+    for s in streams.streams:
+        for formula in (s.domain, s.certified):
+            for a in atoms(formula):
+                if a.pred not in declared and a.pred != "=":
+                    extra.setdefault(a.pred, len(a.args))
+    for r in streams.rules:
+        for a in atoms(r.certified):
+            if a.pred not in declared and a.pred != "=":
+                extra.setdefault(a.pred, len(a.args))
+    if not extra:
+        return domain
+    new = tuple(
+        S.PredicateDecl(name, tuple(S.Typed(f"?x{i}") for i in range(arity)))
+        for name, arity in sorted(extra.items())
+    )
+    return replace(domain, predicates=domain.predicates + new)
 
 
 def optimistic_name(var: str, index: int) -> str:
@@ -139,7 +170,7 @@ def instantiate(
     taken |= known
     _apply_rules(streams, index, add_fact, levels)
 
-    out = Instantiation(problem, [], level=level)
+    out = Instantiation(declare_stream_predicates(domain, streams), problem, [], level=level)
     new_objects: list[S.Typed] = []
     new_facts: list[S.Atom] = []
     counter = itertools.count(1)

@@ -1,19 +1,26 @@
-"""Pass 5 — lowering to what a planner backend supports (one module per step: ground,
+"""Compile pass — lowering to what a planner backend supports (one module per step: ground,
 derived, quantifiers, disjunctions, negations, costs, rename; this one orders them).
 
-A backend states its :class:`~ssr_compile.planners.base.Capabilities` (costs, axioms, negative
-preconditions, disjunction, quantifiers, conditional effects); this pass rewrites the plain
-domain and problem to fit, and returns a map from a plan of its output back to its input:
+A backend states its :class:`~ssr_compile.compile.capabilities.Capabilities` (costs, axioms,
+negative preconditions, disjunction, quantifiers, conditional effects, a ground task); this pass
+rewrites the plain domain and problem to fit, running the steps it needs in this order, each a
+pass with the common contract (:class:`~.result.PassResult`):
 
+* ground task -> the relaxed-reachable ground actions (:mod:`.ground`);
 * axioms  -> derived predicates inlined (:mod:`.derived`);
-* quantifiers -> expanded over the problem's objects (respecting types);
+* quantifiers -> expanded over the problem's objects (respecting types) (:mod:`.quantifiers`);
 * disjunction / ``imply`` -> each action split into one copy per disjunct of its precondition's
-  DNF (``a--1``, ``a--2``...); a disjunctive goal gets one ``ssr-goal--k`` action per disjunct;
+  DNF (``a--1``, ``a--2``...); a disjunctive goal gets one ``ssr-goal--k`` action per disjunct
+  (:mod:`.disjunctions`);
 * negative preconditions -> complement predicates ``not-p`` kept in step by the effects, and
-  equality with constants substituted into the action (its parameter disappears);
-* costs -> unit costs (else integer costs, scaled and rounded up, by :mod:`.costs`);
-* names -> renamed where a reader would refuse them (an action named like a predicate, ``@x``),
-  mapped back by :meth:`Lowered.map_plan`.
+  equality with constants substituted into the action (its parameter disappears)
+  (:mod:`.negations`);
+* costs -> unit costs (else integer costs, scaled and rounded up) (:mod:`.costs`);
+* requirements -> the flags the task really uses (:func:`requirements_of`);
+* names -> renamed where a reader would refuse them (an action named like a predicate, ``@x``)
+  (:mod:`.rename`).
+
+:class:`Lowered` keeps each step's result; its :meth:`~Lowered.map_plan` chains their map-backs.
 """
 
 from __future__ import annotations
@@ -29,41 +36,31 @@ from .formulas import has, map_atoms
 from .ground import Grounded, ground
 from .negations import DISTINCT, remove_negations  # noqa: F401
 from .quantifiers import MAX_EXPANSION, expand_quantifiers, objects_by_type  # noqa: F401
-from .rename import Renaming, rename_task
-
-Plan = list[tuple[str, tuple[str, ...]]]
+from .rename import Renamed, Renaming, rename_task
+from .result import PassResult, Plan, map_back
 
 
 @dataclass
-class Lowered:
-    domain: S.Domain
-    problem: S.Problem
-    scale: int
-    # lowered action name -> (original name, argument template); a template entry is an int
-    # (index into the lowered action's arguments) or a str (a constant substituted in).
-    templates: dict[str, tuple[str, tuple[int | str, ...]]]
-    # names changed so that every reader accepts them (see :func:`lower`)
-    renaming: Renaming | None = None
-    # ground action name -> (lifted action, arguments), when the task was grounded
-    grounded: Grounded | None = None
+class Lowered(PassResult):
+    """The lowering's result: the task for the backend, the scale of its costs (planner units
+    per unit of the input's costs) and the result of each step that ran, in order."""
 
-    def map_plan(self, plan: Plan) -> Plan:
-        out: Plan = []
-        if self.renaming:
-            plan = self.renaming.plan_back(list(plan))
-        for name, args in plan:
-            if name.startswith(GOAL_ACTION):
-                continue
-            original, template = self.templates.get(name, (name, None))
-            if template is None:
-                out.append((original, tuple(args)))
-            else:
-                out.append(
-                    (original, tuple(args[t] if isinstance(t, int) else t for t in template))
-                )
-        if self.grounded is not None:
-            out = self.grounded.map_plan(out)
-        return out
+    scale: int = 1
+    steps: tuple[PassResult, ...] = ()
+
+    @property
+    def grounded(self) -> Grounded | None:
+        """The grounding step's result, when the task was grounded."""
+        return next((s for s in self.steps if isinstance(s, Grounded)), None)
+
+    @property
+    def renaming(self) -> Renaming | None:
+        """The names changed so that every reader accepts them (``None``: none changed)."""
+        renamed = next((s for s in self.steps if isinstance(s, Renamed)), None)
+        return renamed.renaming if renamed is not None and renamed.renaming else None
+
+    def map_plan(self, plan) -> Plan:
+        return map_back(self.steps, plan)
 
 
 def lower(
@@ -83,42 +80,40 @@ def lower(
             line=a.span.line if a.span else None,
             col=a.span.col if a.span else None,
         )
-    domain = normalise_axiom_bodies(domain)
-    grounded = None
+    steps: list[PassResult] = [PassResult(normalise_axiom_bodies(domain), problem)]
     if getattr(caps, "ground", False):
-        grounded = ground(domain, problem, conditional_effects=caps.conditional_effects)
-        domain, problem = grounded.domain, grounded.problem
+        steps.append(ground(*steps[-1].task, conditional_effects=caps.conditional_effects))
     if not caps.axioms:
-        domain, problem = compile_away(domain, problem)
+        steps.append(compile_away(*steps[-1].task))
     if not caps.quantifiers:
-        domain, problem = expand_quantifiers(domain, problem)
-    templates: dict[str, tuple[str, tuple[int | str, ...]]] = {}
+        steps.append(expand_quantifiers(*steps[-1].task))
     if not caps.disjunction:
-        domain, problem, templates = split_disjunctions(domain, problem)
+        steps.append(split_disjunctions(*steps[-1].task))
     if not caps.negative_preconditions:
-        domain, problem, templates = remove_negations(domain, problem, templates)
+        steps.append(remove_negations(*steps[-1].task))
     if not caps.conditional_effects:
-        for a in domain.actions:
+        for a in steps[-1].domain.actions:
             if has(a.effect, S.When):
                 raise UnsupportedError(
                     f"action '{a.name}' has conditional effects, which this planner does not support",
                     line=a.span.line if a.span else None,
                     col=a.span.col if a.span else None,
                 )
-    domain, problem, scale = compile_costs(
-        domain,
-        problem,
+    costed = compile_costs(
+        *steps[-1].task,
         cost_functions=set(cost_functions),
         scale=scale,
         unit_cost=unit_cost or not caps.costs,
     )
+    steps.append(costed)
+    # The requirement flags the task really uses, now that no later step changes them.
+    domain, problem = costed.task
     domain = replace(domain, requirements=requirements_of(domain, problem))
-    problem = replace(problem, requirements=None)
+    steps.append(PassResult(domain, replace(problem, requirements=None)))
     # unified-planning's reader keeps every kind of name in one namespace (an action and a
-    # predicate may not share a name) and wants plain identifiers: rename what offends it,
-    # and map plans back.
-    domain, problem, renaming = rename_task(domain, problem)
-    return Lowered(domain, problem, scale, templates, renaming or None, grounded)
+    # predicate may not share a name) and wants plain identifiers: rename what offends it.
+    steps.append(rename_task(*steps[-1].task))
+    return Lowered(*steps[-1].task, costed.scale, tuple(steps))
 
 
 def requirements_of(domain: S.Domain, problem: S.Problem) -> tuple[str, ...]:

@@ -1,16 +1,20 @@
-"""Lowering step: negative preconditions as complement predicates ``not-p`` kept in step by
+"""Lowering pass — negative preconditions as complement predicates ``not-p`` kept in step by
 the effects; negated equality as the ``ssr-distinct`` relation; equality with constants
-substituted into the action (its parameter disappears)."""
+substituted into the action (its parameter disappears).
+
+:func:`remove_negations` returns a :class:`Negated`, whose map back puts the substituted
+arguments back into the steps of the actions that lost parameters."""
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
 from .formulas import substitute
 from .quantifiers import MAX_EXPANSION, objects_by_type
+from .result import PassResult, Plan
 
 DISTINCT = "ssr-distinct"
 
@@ -18,21 +22,35 @@ DISTINCT = "ssr-distinct"
 # ---------------------------------------------------------------- negation and equality
 
 
-def remove_negations(domain: S.Domain, problem: S.Problem, templates):
+@dataclass
+class Negated(PassResult):
+    """The negations pass's result.  ``templates``: for each action whose equalities were
+    substituted, its input parameters in order, each the position of the argument that now
+    stands for it (int) or the constant substituted for it (str)."""
+
+    templates: dict[str, tuple[int | str, ...]] = field(default_factory=dict)
+
+    def map_plan(self, plan) -> Plan:
+        out: Plan = []
+        for name, args in plan:
+            template = self.templates.get(name)
+            if template is None:
+                out.append((name, tuple(args)))
+            else:
+                out.append((name, tuple(args[t] if isinstance(t, int) else t for t in template)))
+        return out
+
+
+def remove_negations(domain: S.Domain, problem: S.Problem) -> Negated:
     """Complement predicates for negated atoms; equalities substituted away (STRIPS targets)."""
-    templates = dict(templates)
+    templates: dict[str, tuple[int | str, ...]] = {}
     actions: list[S.Action] = []
     for a in domain.actions:
         new, template = _substitute_equalities(a)
         if new is None:
             continue  # an equality that can never hold
         if template is not None:
-            base_name, base_template = templates.get(
-                a.name, (a.name, tuple(range(len(a.parameters))))
-            )
-            # base_template maps the original parameters to a's; template maps a's to new's.
-            composed = tuple(template[t] if isinstance(t, int) else t for t in base_template)
-            templates[new.name] = (base_name, composed)
+            templates[new.name] = template
         actions.append(new)
     negated: set[str] = set()
     for a in actions:
@@ -43,7 +61,7 @@ def remove_negations(domain: S.Domain, problem: S.Problem, templates):
         if isinstance(lit, S.Not) and isinstance(lit.arg, S.Atom):
             negated.add(lit.arg.pred)
     if not negated:
-        return replace(domain, actions=tuple(actions)), problem, templates
+        return Negated(replace(domain, actions=tuple(actions)), problem, templates)
 
     def neg_name(pred: str) -> str:
         # (not (= ?a ?b)) reads (ssr-distinct ?a ?b), true of every pair of distinct objects.
@@ -106,7 +124,7 @@ def remove_negations(domain: S.Domain, problem: S.Problem, templates):
         for p in sorted(negated)
     ]
     goal = positive_pre(problem.goal) if problem.goal is not None else None
-    return (
+    return Negated(
         replace(domain, actions=tuple(actions), predicates=tuple(predicates)),
         replace(problem, init=problem.init + tuple(extra_init), goal=goal),
         templates,

@@ -1,4 +1,7 @@
-"""Lowering step: quantifiers expanded over the problem's objects (respecting types)."""
+"""Lowering pass — quantifiers expanded over the problem's objects (respecting types).
+
+:func:`expand_quantifiers` returns a :class:`~.result.PassResult`; no action is renamed, so
+plans map back unchanged."""
 
 from __future__ import annotations
 
@@ -9,6 +12,7 @@ from dataclasses import replace
 from .. import syntax as S
 from ..errors import UnsupportedError
 from .formulas import substitute
+from .result import PassResult
 
 MAX_EXPANSION = 200_000
 
@@ -48,7 +52,7 @@ def objects_by_type(domain: S.Domain, problem: S.Problem) -> Callable[[S.TypeRef
     return of
 
 
-def expand_quantifiers(domain: S.Domain, problem: S.Problem):
+def expand_quantifiers(domain: S.Domain, problem: S.Problem) -> PassResult:
     of_type = objects_by_type(domain, problem)
     budget = [MAX_EXPANSION]
 
@@ -99,4 +103,4 @@ def expand_quantifiers(domain: S.Domain, problem: S.Problem):
     )
     axioms = tuple(replace(ax, body=cond(ax.body)) for ax in domain.axioms)
     goal = cond(problem.goal) if problem.goal is not None else None
-    return replace(domain, actions=actions, axioms=axioms), replace(problem, goal=goal)
+    return PassResult(replace(domain, actions=actions, axioms=axioms), replace(problem, goal=goal))

@@ -2,9 +2,10 @@
 
 unified-planning keeps types, predicates, functions, actions and objects in one namespace
 (an action and a predicate may not share a name), and some readers accept only plain
-identifiers (no ``@``).  :func:`rename_task` gives every offending name a fresh safe name and
-returns a :class:`Renaming` whose :meth:`~Renaming.plan_back` restores the input's names, in
-the spirit of unified-planning's compilers that return a map back to the original actions.
+identifiers (no ``@``).  :func:`rename_task`, the last lowering pass, gives every offending
+name a fresh safe name and returns a :class:`Renamed` result: the renamed task, the
+:class:`Renaming` it used, and the map back to the input's names
+(:meth:`Renaming.plan_back`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import re
 from dataclasses import dataclass, field
 
 from .. import syntax as S
+from .result import PassResult, Plan
 
 GroundAction = tuple[str, tuple[str, ...]]
 
@@ -49,14 +51,25 @@ class Renaming:
         ]
 
 
+@dataclass
+class Renamed(PassResult):
+    """The renaming pass's result: the renamed task and its :class:`Renaming` (empty when no
+    name had to change)."""
+
+    renaming: Renaming = field(default_factory=Renaming)
+
+    def map_plan(self, plan) -> Plan:
+        if not self.renaming:
+            return super().map_plan(plan)
+        return self.renaming.plan_back(list(plan))
+
+
 def _safe(name: str) -> str:
     text = re.sub(r"[^a-z0-9_-]", "_", name.lower())
     return text if text[:1].isalpha() else "x" + text
 
 
-def rename_task(
-    domain: S.Domain, problem: S.Problem, *, one_namespace: bool = True
-) -> tuple[S.Domain, S.Problem, Renaming]:
+def rename_task(domain: S.Domain, problem: S.Problem, *, one_namespace: bool = True) -> Renamed:
     """Rename unsafe names (and, with ``one_namespace``, names shared between kinds); the
     domain's and the problem's names too when a reader would refuse them."""
     kinds = {
@@ -89,8 +102,8 @@ def rename_task(
         if name and not SAFE.match(name) and name not in renaming.names:
             renaming.names[name] = _safe(name)
     if not renaming:
-        return domain, problem, renaming
-    return _domain(domain, renaming), _problem(problem, renaming), renaming
+        return Renamed(domain, problem, renaming)
+    return Renamed(_domain(domain, renaming), _problem(problem, renaming), renaming)
 
 
 def _type_names(types: tuple[S.Typed, ...]) -> list[str]:

@@ -201,7 +201,8 @@ class ExternalPlanner:
         try:
             task, renaming = self.prepare(domain, problem), None
             if self.plain_names:
-                *task, renaming = rename_task(*task)  # a no-op on the compiler's output
+                renamed = rename_task(*task)  # a no-op on the compiler's output
+                task, renaming = (renamed.domain, renamed.problem), renamed.renaming
             job.task = tuple(task)
             self.write(job, *job.task)
             actions = self.run(job)

@@ -34,7 +34,8 @@ def validate_plan(
     from unified_planning.plans import ActionInstance, SequentialPlan
 
     up.get_environment().credits_stream = None
-    dom, prob, renaming = rename_task(domain, problem)
+    renamed = rename_task(domain, problem)
+    dom, prob, renaming = renamed.domain, renamed.problem, renamed.renaming
     act = renaming.actions
     obj = renaming.objects
     with tempfile.TemporaryDirectory(prefix="ssr-validate-") as tmp:

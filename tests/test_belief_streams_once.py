@@ -1,0 +1,103 @@
+"""``sample-obs`` is written once, in the belief library (:func:`sample_obs`), and the belief
+parameters (eps, delta, c, c', p_FN, noise) live in one dataclass: both shipped domains, the
+kitchen and belief-detect, go through them."""
+
+from __future__ import annotations
+
+import copy
+import inspect
+
+import numpy as np
+import pytest
+
+from ssr_compile.belief.observation import DEFAULTS, BeliefParameters, obs_cost, sample_obs
+from ssr_compile.belief.particles import ObservationModel, PoseBelief, Surface
+
+pytest.importorskip("pybullet")
+
+from ssr_compile.sim.problem import task_problem  # noqa: E402
+from ssr_compile.sim.tasks import make_task  # noqa: E402
+from ssr_compile.streams import belief_detect as bd  # noqa: E402
+from ssr_compile.streams import kitchen_module as km  # noqa: E402
+
+
+def _library(o, pb, rng, **kw):
+    """The library's observations, heaviest first, with the shipped domains' parameters."""
+    out = sample_obs(o, pb, rng, delta=DEFAULTS.delta, eps=DEFAULTS.eps, heaviest_first=True, **kw)
+    return [obs for (obs,) in out]
+
+
+def test_belief_detect_sample_obs_is_the_librarys():
+    prior = bd.VALUES["pb-target"]
+    streams = bd.DetectStreams(3)
+    rng = copy.deepcopy(streams.rng)
+    got = [obs for (obs,) in streams.sample_obs("target", prior)]
+    assert len(got) == 3 and got == _library("target", prior, rng)
+
+
+def test_kitchen_sample_obs_is_the_librarys():
+    for name in ("inspect", "cook"):
+        task = make_task(name, 0)
+        try:
+            problem, values = task_problem(task)
+            module = km.make_module(task, np.random.default_rng(5), values)
+            kitchen = module.module
+            possible = [f for f in problem.init if getattr(f, "pred", None) == "possible"]
+            assert possible
+            for fact in possible:
+                o, pb_name, s = (a.name for a in fact.args)
+                pb = values[pb_name]
+                seen = (pb.surface_names == s) & (pb.weights > 0) & kitchen._seeable(o, pb, s)
+                rng = copy.deepcopy(kitchen.rng)
+                got = [obs for (obs,) in module.streams["sample-obs"](o, pb, s)]
+                assert got == _library(o, pb, rng, among=seen), (name, o, s)
+                assert all(obs.region.surface == s for obs in got)
+        finally:
+            task.world.close()
+
+
+def test_both_domains_give_the_same_observations_of_the_same_belief(monkeypatch):
+    """belief-detect's prior (all on the table), asked of the kitchen's stream with every
+    particle in the camera's view, gives belief-detect's observations."""
+    prior = bd.VALUES["pb-target"]
+    task = make_task("inspect", 0)
+    try:
+        kitchen = km.make_module(task, np.random.default_rng(0)).module
+        monkeypatch.setattr(kitchen, "_seeable", lambda o, pb, s: np.ones(len(pb), bool))
+        kitchen.rng = np.random.default_rng(7)
+        in_kitchen = [obs for (obs,) in kitchen.sample_obs("target", prior, "table")]
+    finally:
+        task.world.close()
+    in_detect = [obs for (obs,) in bd.DetectStreams(7).sample_obs("target", prior)]
+    assert len(in_detect) == 3 and in_kitchen == in_detect
+
+
+def test_belief_parameters_live_in_one_dataclass():
+    assert bd.BELIEF == km.BELIEF == DEFAULTS == BeliefParameters()
+    assert DEFAULTS.model == ObservationModel(p_fn=0.1)
+    assert (km.MODEL, km.EPS, km.DELTA) == (km.BELIEF.model, km.BELIEF.eps, km.BELIEF.delta)
+    assert (km.C_DETECT, km.C_RECOVER) == (km.BELIEF.c_detect, km.BELIEF.c_recover)
+    for module in (bd, km):
+        text = inspect.getsource(module)
+        assert "ObservationModel(p_fn" not in text
+        assert not any(f"{name} = 0.1" in text for name in ("EPS", "DELTA")), module.__name__
+        assert not any(f"{name} = 1.0" in text for name in ("C_DETECT", "C_RECOVER"))
+    # the library's defaults are the dataclass's
+    pb = PoseBelief.point("o", Surface("t", (0, 0), (1, 1), 0.0), (0, 0, 0, 0))
+    (obs,) = next(sample_obs("o", pb, np.random.default_rng(0)))
+    assert (obs.eps, obs.region.delta) == (DEFAULTS.eps, DEFAULTS.delta)
+    assert obs_cost(obs, pb, 1) == obs_cost(obs, pb, 1, 1.0, 1.0, ObservationModel(p_fn=0.1))
+
+
+def test_sample_obs_among_restricts_centres_and_regions():
+    surface = Surface("t", (0, 0), (1, 1), 0.0)
+    pb = PoseBelief.uniform("o", [surface], 60, np.random.default_rng(1))
+    among = pb.poses[:, 0] > 0
+    for heaviest_first in (False, True):
+        out = sample_obs(
+            "o", pb, np.random.default_rng(2), among=among, heaviest_first=heaviest_first
+        )
+        for _, (obs,) in zip(range(30), out):
+            assert among[list(obs.region.indices)].all() and obs.z[0] > 0
+    nothing = np.zeros(len(pb), bool)
+    assert list(sample_obs("o", pb, np.random.default_rng(2), among=nothing)) == []
