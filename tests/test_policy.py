@@ -118,6 +118,11 @@ def test_constant_facts_keep_only_static_facts_over_constants_and_their_values()
     assert facts and all(all(a.name in constants for a in f.args) for f in facts)
     assert {f.pred for f in facts} <= {"grasp", "graspable"}
     assert any(f.pred == "grasp" for f in facts)
+    # only what the plan rests on: a grasp sampled on the way but unused is not kept (every kept
+    # grasp would multiply the next optimistic problem)
+    used = {a for step in solution.plan for a in step.args}
+    assert grasps - used, "the example should sample a grasp the plan does not use"
+    assert all(f.args[1].name in used for f in facts if f.pred == "grasp")
     assert set(values) <= grasps and values  # the grasps' Python values travel with them
     assert all(v[0] == "d" and v[1] in progress.GRASPS for v in values.values())
     # s ∪ f_prev: the kept facts and their objects join the next problem
