@@ -24,7 +24,7 @@ from contextlib import contextmanager
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
-from ssr_compile.sim.problem import canonical_surface, is_localized
+from ssr_compile.sim.problem import ABOVE, canonical_surface, is_localized
 from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
 from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
@@ -95,23 +95,29 @@ class KitchenModule:
             return w.surface_frame(surface)
 
     @contextmanager
-    def planning(self, open_drawer: str | None = None):
+    def planning(self, open_drawer: str | None = None, moving: str | None = None):
+        """The planning state: movable objects out, drawers at the openings the robot saw
+        (``open_drawer`` open); ``moving``: a drawer about to be pulled or pushed -- the drawers
+        above it are closed, as the domain's ``blocked`` guarantees when it moves."""
         w = self.world
+        above = {d1 for d1, d2 in ABOVE if d2 == moving}
         with w.saved():
             w.held = None
             for o in list(w.objects):
                 if w.support.get(o) is not None:
                     w.remove_object(o)
             for d, q in self.drawers.items():
-                w.set_drawer(d, DRAWER_TRAVEL if d == open_drawer else q)
+                w.set_drawer(d, DRAWER_TRAVEL if d == open_drawer else 0.0 if d in above else q)
             w.set_arm(ARM_TUCK)
             yield w
 
-    def _each(self, make: Callable[[], Iterator], open_drawer: str | None = None) -> Iterator:
+    def _each(
+        self, make: Callable[[], Iterator], open_drawer: str | None = None, moving: str | None = None
+    ) -> Iterator:
         """Iterate a geometric generator, each draw inside the planning state."""
         it = None
         while True:
-            with self.planning(open_drawer):
+            with self.planning(open_drawer, moving):
                 if it is None:
                     it = iter(make())
                 try:
@@ -246,10 +252,10 @@ class KitchenModule:
             return self.ks.plan_arm_motion(bq, q1, q2)
 
     def sample_drawer_base(self, d: str):
-        return self._each(lambda: self.ks.sample_drawer_base(d))
+        return self._each(lambda: self.ks.sample_drawer_base(d), moving=d)
 
     def _drawer_motion(self, d: str, a1, a2, bq, start=None):
-        with self.planning():
+        with self.planning(moving=d):
             self.world.set_drawer(d, a1[1])
             if not self._reachable(bq, self.world.handle_pose(d)):
                 return None

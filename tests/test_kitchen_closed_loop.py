@@ -127,3 +127,22 @@ def test_long_tasks_in_closed_loop(task, minutes):
             assert first_box_pick < first_detect
     finally:
         ep.close()
+
+
+def test_a_drawer_below_an_open_one_is_planned_with_the_upper_one_closed():
+    # Swap: with both drawers open, the bottom one can only move once the top one is closed
+    # (the domain's `blocked`), so its base and its push are planned in that state -- planned in
+    # the state as seen, no base was ever found and the replan had no relaxed solution.
+    import itertools
+
+    ep = make_episode("swap", 0)
+    try:
+        km = ep.agent.km
+        km.drawers = {"top_drawer": DRAWER_TRAVEL, "bottom_drawer": DRAWER_TRAVEL}
+        bases = list(itertools.islice(km.sample_drawer_base("bottom_drawer"), 2))
+        assert bases
+        a1, a2 = ("bottom_drawer", DRAWER_TRAVEL), ("bottom_drawer", 0.0)
+        assert any(km._plan_drawer("bottom_drawer", a1, a2, bq) is not None for (bq,) in bases)
+        assert km.drawers["top_drawer"] == DRAWER_TRAVEL  # the robot's knowledge is untouched
+    finally:
+        ep.close()
