@@ -97,10 +97,11 @@ class KitchenModule:
     @contextmanager
     def planning(self, open_drawer: str | None = None, moving: str | None = None):
         """The planning state: movable objects out, drawers at the openings the robot saw
-        (``open_drawer`` open); ``moving``: a drawer about to be pulled or pushed -- the drawers
-        above it are closed, as the domain's ``blocked`` guarantees when it moves."""
+        (``open_drawer`` open: something in it is reached); ``moving``: a drawer about to be
+        pulled or pushed.  The drawers above either are closed, as the domain guarantees then
+        (``blocked``, ``accessible``)."""
         w = self.world
-        above = {d1 for d1, d2 in ABOVE if d2 == moving}
+        above = {d1 for d1, d2 in ABOVE if d2 in (moving, open_drawer)}
         with w.saved():
             w.held = None
             for o in list(w.objects):
