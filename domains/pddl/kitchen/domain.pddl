@@ -37,7 +37,7 @@
     (atconf ?r ?q) (atangle ?d ?a) (handempty) (atgrasp ?o ?g) (atposeb ?o ?pb)
     (cooked ?o) (stoveon)
     ; derived
-    (boccluded ?o ?obs) (armstowed) (accessible ?o ?pb) (blocked ?d) (unsafe ?o ?pb)
+    (boccluded ?o ?obs) (armstowed) (accessible ?o ?pb) (blocked ?d) (covered ?d) (unsafe ?o ?pb)
     (on ?o ?s))
   (:functions (obscost ?o ?pb ?obs) (total-cost) - number)
 
@@ -64,7 +64,13 @@
   ; ?o at ?pb can be reached: on a fixed surface or in an open drawer
   (:derived (accessible ?o ?pb)
     (or (exists (?s) (and (beliefon ?o ?pb ?s) (fixed ?s)))
-        (exists (?d ?a) (and (beliefon ?o ?pb ?d) (atangle ?d ?a) (open ?d ?a)))))
+        (exists (?d ?a) (and (beliefon ?o ?pb ?d) (atangle ?d ?a) (open ?d ?a)
+                             (not (covered ?d))))))
+
+  ; an open drawer above ?d overhangs it: the arm reaches into ?d, or moves its handle, only
+  ; with the drawers above closed (the streams plan those motions in that state)
+  (:derived (covered ?d)
+    (exists (?d2 ?a) (and (above ?d2 ?d) (atangle ?d2 ?a) (open ?d2 ?a))))
 
   ; a tall object in a drawer keeps it from closing
   (:derived (blocked ?d)
@@ -109,7 +115,8 @@
   (:action pull
     :parameters (?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)
     :precondition (and (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t) (closed ?d ?a1) (open ?d ?a2)
-                       (atangle ?d ?a1) (handempty) (atconf base ?bq) (atconf arm ?aq1))
+                       (atangle ?d ?a1) (not (covered ?d)) (handempty)
+                       (atconf base ?bq) (atconf arm ?aq1))
     :effect (and (atangle ?d ?a2) (not (atangle ?d ?a1))
                  (atconf arm ?aq2) (not (atconf arm ?aq1))
                  (increase (total-cost) 1)))
@@ -117,7 +124,7 @@
   (:action push
     :parameters (?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t)
     :precondition (and (drawerkin ?d ?a1 ?a2 ?bq ?aq1 ?aq2 ?t) (open ?d ?a1) (closed ?d ?a2)
-                       (atangle ?d ?a1) (not (blocked ?d)) (handempty)
+                       (atangle ?d ?a1) (not (blocked ?d)) (not (covered ?d)) (handempty)
                        (atconf base ?bq) (atconf arm ?aq1))
     :effect (and (atangle ?d ?a2) (not (atangle ?d ?a1))
                  (atconf arm ?aq2) (not (atconf arm ?aq1))

@@ -40,6 +40,7 @@
     (placeable block bottom_drawer)
     (poseb block pb-block)
     (atposeb block pb-block)
+    (current block pb-block)
     (possible block pb-block top_drawer)
     (possible block pb-block bottom_drawer)
     (= (total-cost) 0))
