@@ -112,9 +112,24 @@ def test_inspect_other_seeds(seed, minutes):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="issue 11: long plans (pick/place) exceed the planning limits so far",
+def test_stow_in_closed_loop(minutes):
+    # Stow (seed 0): the sugar box in the top drawer must go out before the block goes in; the
+    # robot picks and places from where its noisy base motions land, and pushes the drawer
+    # closed from the arm configuration it moved to.
+    ep = make_episode("stow", 0)
+    try:
+        res = run_policy(ep, PolicySettings(variant="both", budget=600, max_cycles=60))
+        assert res.success, (res.reason, res.actions)
+        names = [a.split()[0].lstrip("(") for a in res.actions]
+        assert names.count("pick") == 2 and names.count("place") == 2 and names[-1] == "push"
+    finally:
+        ep.close()
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(reason="issue 11: Swap and Cook replans still outgrow the planning limits",
                    strict=False)  # fmt: skip
-@pytest.mark.parametrize("task", ["stow", "swap", "cook"])
+@pytest.mark.parametrize("task", ["swap", "cook"])
 def test_long_tasks_in_closed_loop(task, minutes):
     ep = make_episode(task, 0)
     try:
