@@ -251,10 +251,13 @@ class EpisodeResult:
 # ---------------------------------------------------------------- Algorithm 1
 
 
-def _supported(solution: Solution) -> list[S.Atom]:
+def _supported(solution: Solution, init: Iterable = ()) -> list[S.Atom]:
     """The certificate and, transitively, the facts certified by the real stream results it
-    rests on (a result whose certified facts are needed brings its domain facts in)."""
-    needed = list(dict.fromkeys(solution.certificate))
+    rests on (a result whose certified facts are needed brings its domain facts in).  Facts of
+    the initial state ``init`` are the state's, not the plan's: the next problem states them
+    again if they still hold (a held object's grasp does not outlive the placement)."""
+    given = set(init)
+    needed = [f for f in dict.fromkeys(solution.certificate) if f not in given]
     seen = set(needed)
     results = [r for r in solution.evaluated if not r.optimistic]
     used: set[int] = set()
@@ -267,7 +270,7 @@ def _supported(solution: Solution) -> list[S.Atom]:
             used.add(i)
             changed = True
             for f in (*r.certified, *r.domain):
-                if f not in seen:
+                if f not in seen and f not in given:
                     seen.add(f)
                     needed.append(f)
     return needed
@@ -284,7 +287,7 @@ def constant_facts(
     declared = {o.name for o in problem.objects}
     facts: list[S.Atom] = []
     values: dict[str, Any] = {}
-    proven = _supported(solution)
+    proven = _supported(solution, problem.init)
     for atom in proven:
         if not isinstance(atom, S.Atom) or atom.pred == "=":
             continue

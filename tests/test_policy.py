@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from ssr_compile import syntax as S
 from ssr_compile.streams import belief_detect, progress
 
 from ssr_compile.cli import main
@@ -232,3 +233,16 @@ def test_a_stream_that_never_returns_ends_the_episode_naming_it(monkeypatch):
     assert not result.success
     assert "stream 'inv-kin' did not return" in result.reason
     assert result.actions == []
+
+
+def test_constant_facts_leave_the_initial_state_to_the_next_problem():
+    # A held object's grasp (`g-o`, a constant) is a fact of the state: kept past the placement,
+    # the next problem would name an object it no longer declares.
+    from types import SimpleNamespace
+
+    held = S.Atom("grasp", (S.Const("o"), S.Const("g-o")))
+    made = S.Atom("grasp", (S.Const("o"), S.Const("g-1")))
+    problem = S.Problem("p", "d", objects=(S.Typed("o"), S.Typed("g-o")), init=(held,))
+    solution = SimpleNamespace(certificate=[held, made], evaluated=[], values=None)
+    facts, _ = constant_facts(solution, problem, lambda n: True)
+    assert facts == (made,)
