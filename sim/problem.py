@@ -215,6 +215,7 @@ def state_problem(
         obj(s)
         init.append(_atom("surface", s))
         init.append(_atom("fixed", s) if s in FIXED else _atom("drawer", s))
+    init.append(_atom("hasbutton", "stove"))
     for d in DRAWERS:
         closed = obj(angle_name(d, False), (d, 0.0))
         opened = obj(angle_name(d, True), (d, DRAWER_TRAVEL))

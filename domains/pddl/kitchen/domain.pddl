@@ -11,6 +11,7 @@
   (:predicates
     ; static: given in the problem
     (graspable ?o) (tall ?o) (surface ?s) (fixed ?s) (drawer ?d) (placeable ?o ?s)
+    (hasbutton ?s)                    ; the stove's on/off button is pressed from a pressbase
     (angle ?d ?a) (open ?d ?a) (closed ?d ?a) (above ?d1 ?d2)
     (stow ?q) (stowempty ?q) (stowheld ?q)
     (reached ?q)                      ; the robot is at configuration ?q (base, arm)

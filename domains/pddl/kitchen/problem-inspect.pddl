@@ -11,6 +11,7 @@
     (drawer top_drawer)
     (surface bottom_drawer)
     (drawer bottom_drawer)
+    (hasbutton stove)
     (angle top_drawer top_drawer-closed)
     (angle top_drawer top_drawer-open)
     (closed top_drawer top_drawer-closed)

@@ -62,7 +62,7 @@
   ; base configurations from which the stove's button can be pressed
   (:stream sample-press-base
     :inputs (?s)
-    :domain (fixed ?s)
+    :domain (hasbutton ?s)
     :outputs (?bq)
     :certified (and (conf base ?bq) (pressbase ?bq)))
   ; the approach path to the button (function)
