@@ -27,14 +27,14 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from . import syntax as S
-from .compile.instantiate import Instance, Result, real_function_terms
+from .compile.instantiate import Instance, Result, real_instances
 from .compile.pipeline import compile_problem
 from .errors import PlannerFailure, StreamError, StreamFailure
 from .preimage import plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
 
 SOLVED = "solved"
-# Cost functions at most this expensive (StreamInfo.cost) are evaluated eagerly.
+# Cost functions and tests at most this expensive (StreamInfo.cost) are evaluated eagerly.
 EAGER_COST = 0.1
 
 
@@ -347,6 +347,7 @@ def solve(
     progress: Callable[[str], None] | None = None,
     unit_cost: bool = False,
     eager_cost: float = EAGER_COST,
+    eager_tests: bool = True,
     share: bool = False,
     state: ReplanState | None = None,
 ) -> Solution:
@@ -360,6 +361,8 @@ def solve(
     Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
     soon as their arguments are real (before planning), so the planner sees their real
     values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
+    With ``eager_tests``, so are the tests that cheap: a test that fails on real inputs is
+    never an optimistic fact the planner builds a plan on (one planner call per failed test).
     ``share``: instances with optimistic inputs share their optimistic outputs (see
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
@@ -383,6 +386,7 @@ def solve(
         progress=progress,
         unit_cost=unit_cost,
         eager_cost=eager_cost,
+        eager_tests=eager_tests,
         share=share,
     )
     return loop.run()
@@ -423,6 +427,7 @@ class _FocusedLoop:
         progress: Callable[[str], None] | None,
         unit_cost: bool,
         eager_cost: float,
+        eager_tests: bool,
         share: bool,
     ):
         from .planners import get_planner
@@ -453,6 +458,11 @@ class _FocusedLoop:
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
         self.eager = {
             f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
+        }
+        self.eager_tests = {
+            s.name
+            for s in streams.streams
+            if eager_tests and s.is_test and module.info_for(s.name).cost <= eager_cost
         }
 
     def run(self) -> Solution:
@@ -499,10 +509,11 @@ class _FocusedLoop:
         return sol
 
     def evaluate_cheap_functions(self) -> None:
-        """The cheap cost functions over real arguments, once per new real result."""
-        if self.eager and len(self.ev.results) != self.eager_seen:
+        """The cheap cost functions and tests over real arguments, once per new real result
+        (a test that passes adds facts: again until none does)."""
+        while (self.eager or self.eager_tests) and len(self.ev.results) != self.eager_seen:
             self.eager_seen = len(self.ev.results)
-            _evaluate_eagerly(self.streams, self.problem, self.eager, self.ev)
+            _evaluate_eagerly(self.streams, self.problem, self.eager, self.eager_tests, self.ev)
 
     def compile(self):
         """The optimistic problem of this level, constrained by the inherited plan tail."""
@@ -671,11 +682,11 @@ class _RealFacts:
 
 
 def _evaluate_eagerly(
-    streams: S.StreamFile, problem: S.Problem, names: set[str], ev: _Evaluation
+    streams: S.StreamFile, problem: S.Problem, names: set[str], tests: set[str], ev: _Evaluation
 ) -> None:
-    """Evaluate the cheap cost-function terms (``names``) whose domain holds in the real facts
-    and that have no value yet."""
-    for inst in real_function_terms(streams, problem, ev.results, names):
+    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``) whose domain
+    holds in the real facts and that have no outcome yet."""
+    for inst in real_instances(streams, problem, ev.results, functions=names, tests=tests):
         if inst in ev.outcomes:
             continue
         res = Result(inst, (), (), (), 0)

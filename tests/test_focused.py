@@ -232,3 +232,18 @@ def test_cheap_functions_are_evaluated_eagerly_and_the_plan_is_as_cheap():
     assert lazy.status == eager.status == "solved"
     assert eager.cost <= lazy.cost + 1e-9
     assert eager.stats.planner_calls <= lazy.stats.planner_calls
+
+
+@pytest.mark.parametrize("problem", ["problem.pddl", "problem-blocked.pddl"])
+def test_cheap_tests_are_evaluated_before_planning_and_no_plan_rests_on_a_failed_one(problem):
+    module, eager = run(problem, progress=(said := []).append)
+    _, lazy = run(problem, eager_tests=False)
+    assert lazy.status == eager.status == "solved"
+    assert eager.cost <= lazy.cost + 1e-9
+    assert eager.stats.planner_calls <= lazy.stats.planner_calls
+    values, b_pose = _values_with_b(module, problem)
+    _simulate(eager.plan, values, {"a": values["pa"], "b": values[b_pose]})
+    # a test over real inputs is evaluated before any plan can count on it: a stream plan's
+    # test failing on real inputs would have been found eagerly
+    assert not any("test-cfree" in line and line.endswith("failed") for line in said
+                   if "opt" not in line)
