@@ -547,7 +547,7 @@ class _FocusedLoop:
         )
         self.stats.planner_calls += 1
         self.stats.planner_time += result.time
-        size = _size(compiled.problem, getattr(self.backend, "last_operators", None))
+        size = _size(compiled, getattr(self.backend, "last_operators", None))
         self.stats.sizes.append(size)
         self.say(
             f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects, "
@@ -746,9 +746,16 @@ def _producers(results: list[Result], inst) -> dict[int, list[int]]:
     return out
 
 
-def _size(problem: S.Problem, operators: int | None) -> tuple[int, int, int, int | None]:
+def _size(compiled, operators: int | None) -> tuple[int, int, int, int | None]:
+    """Objects, facts and function values of the optimistic problem, and the ground actions
+    of the planner's task (the planner's count, or the grounding pass's; ``None``: unknown)."""
+    problem = compiled.source_problem or compiled.problem
     facts = sum(1 for f in problem.init if isinstance(f, S.Atom))
-    return (len(problem.objects), facts, len(problem.init) - facts, operators)
+    grounded = compiled.lowered.grounded if compiled.lowered is not None else None
+    if operators is None and grounded is not None:
+        operators = len(grounded.domain.actions)
+    objects = len(problem.objects) + len(compiled.source_domain.constants if compiled.source_domain else ())
+    return (objects, facts, len(problem.init) - facts, operators)
 
 
 def _steps(plan, values: ValueTable, deferred_objects: set[str]) -> list[Step]:
