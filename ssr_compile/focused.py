@@ -29,8 +29,9 @@ from typing import Any
 from . import syntax as S
 from .compile.instantiate import Instance, Result, real_instances
 from .compile.pipeline import compile_problem
-from .errors import PlannerFailure, StreamError, StreamFailure
-from .preimage import plan_preimage, stream_plan
+from .errors import PlannerFailure, SSRError, StreamError, StreamFailure
+from .planners.costs import plan_cost
+from .preimage import PlanInvalid, plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
 
 SOLVED = "solved"
@@ -348,6 +349,7 @@ def solve(
     unit_cost: bool = False,
     eager_cost: float = EAGER_COST,
     eager_tests: bool = True,
+    redraws: int = 0,
     share: bool = False,
     state: ReplanState | None = None,
 ) -> Solution:
@@ -363,6 +365,13 @@ def solve(
     values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
     With ``eager_tests``, so are the tests that cheap: a test that fails on real inputs is
     never an optimistic fact the planner builds a plan on (one planner call per failed test).
+    ``redraws``: a generator whose draw a test of the same stream plan rejected may draw again
+    at the same level, up to this many times per instance and level, instead of leaving the
+    level without a sample (whose optimistic problem the planner may then have to prove
+    unsolvable, at a cost exponential in the number of objects to arrange); off by default
+    (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
+    When every result of a stream plan succeeds and the plan, with the values drawn, is valid
+    and costs no more than planned, it is the solution (no planner call to find it again).
     ``share``: instances with optimistic inputs share their optimistic outputs (see
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
@@ -387,6 +396,7 @@ def solve(
         unit_cost=unit_cost,
         eager_cost=eager_cost,
         eager_tests=eager_tests,
+        redraws=redraws,
         share=share,
     )
     return loop.run()
@@ -428,6 +438,7 @@ class _FocusedLoop:
         unit_cost: bool,
         eager_cost: float,
         eager_tests: bool,
+        redraws: int,
         share: bool,
     ):
         from .planners import get_planner
@@ -455,6 +466,8 @@ class _FocusedLoop:
         }
         self.level = level
         self.best_failure = "no plan"
+        self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
+        self.redraws_per_level = max(int(redraws), 0)
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
         self.eager = {
             f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
@@ -572,6 +585,7 @@ class _FocusedLoop:
             )
         self.level += 1
         self.ev.tried.clear()
+        self.redraws.clear()
         return None
 
     def use_plan(self, compiled, result) -> Solution | None:
@@ -597,8 +611,42 @@ class _FocusedLoop:
                 deferred=later,
             )
         ordered = order_stream_plan(now, self.module.info_for, _producers(now, inst))
+        self.compiled_objects = inst.objects
         self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
-        return self.evaluate_stream_plan(ordered, inst.shared)
+        done = self.evaluate_stream_plan(ordered, inst.shared)
+        if done is None and self.stream_plan_ok and not later and not inst.shared:
+            done = self.bound_solution(compiled, plan, inst)
+        return done
+
+    def bound_solution(self, compiled, plan, inst) -> Solution | None:
+        """Every result of the stream plan succeeded: the plan with its optimistic objects
+        bound to their real values, when it is valid over the real facts and costs no more
+        than planned (optimistic costs are lower bounds: replanning would find it again,
+        after one more planner call); ``None``: plan again."""
+        binding = self.stream_plan_binding
+        bound = [(name, tuple(binding.get(a, a) for a in args)) for name, args in plan]
+        if any(a in inst.objects for _, args in bound for a in args):
+            return None
+        facts = {f for f in self.problem.init if isinstance(f, S.Atom)}
+        for r in self.ev.results:
+            facts.update(r.certified)
+        values = [v for v in self.problem.init if isinstance(v, S.InitValue)]
+        values += [S.InitValue(t, S.Num(v)) for t, v in self.ev.real_functions.items()]
+        real = replace(
+            compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values)
+        )
+        try:
+            pre = plan_preimage(compiled.source_domain, real, bound)
+            cost = plan_cost(compiled.source_domain, real, bound)
+            planned = plan_cost(compiled.source_domain, compiled.source_problem, plan)
+        except (PlanInvalid, SSRError):
+            return None
+        if not cost <= planned + 1e-9 or cost > self.max_cost:
+            return None
+        self.say("  the plan holds with the values drawn")
+        return self.finish(
+            SOLVED, _steps(bound, self.values, set()), cost, sorted(pre.static_facts, key=str)
+        )
 
     def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:
         """Evaluate the stream plan in order, binding optimistic objects to real values; a
@@ -612,6 +660,8 @@ class _FocusedLoop:
         # whose domain needs one of them is not evaluated (its domain does not hold), and
         # what it would certify is unproven too.
         failed_facts: set[S.Atom] = set()
+        self.stream_plan_ok = False
+        all_ok = True
         for res in ordered:
             if time.monotonic() >= self.deadline:
                 return self.finish(
@@ -623,18 +673,46 @@ class _FocusedLoop:
             ):
                 failed.update(res.outputs)
                 failed_facts.update(res.certified)
+                all_ok = False
                 continue
             if not shared or not any(x in shared for x in (*res.instance.inputs, *res.outputs)):
                 ok = self.ev.evaluate(res, binding)
                 self.ev.record(ok, res.instance.stream)
                 if not ok:
+                    all_ok = False
                     failed.update(res.outputs)
                     failed_facts.update(res.certified)
                     self.say(f"  {res.instance} failed")
+                    if res.instance.kind == "test":
+                        self.redraw_rejected(res, binding)
                 continue
             if not self.evaluate_shared(res, shared, binding, values_of, facts):
+                all_ok = False
                 failed.update(res.outputs)
+        self.stream_plan_ok = all_ok
+        self.stream_plan_binding = binding
         return None
+
+    def redraw_rejected(self, test: Result, binding: dict[str, str]) -> None:
+        """A test failed on a value a generator of this stream plan just drew: the draw was
+        rejected, so the generator may draw again at this level (at most ``redraws`` rejected
+        draws per instance and level) instead of leaving the level without that sample."""
+        inst = self.compiled_objects
+        for x in test.instance.inputs:
+            producer = inst.get(x)
+            if producer is None or producer.instance.kind != "stream":
+                continue
+            real = Instance(
+                producer.instance.stream,
+                tuple(binding.get(y, y) for y in producer.instance.inputs),
+                producer.instance.kind,
+            )
+            if real in self.ev.exhausted or real not in self.ev.tried:
+                continue
+            count = self.redraws.get(real, 0)
+            if count < self.redraws_per_level:
+                self.redraws[real] = count + 1
+                self.ev.tried.discard(real)
 
     def evaluate_shared(self, res, shared, binding, values_of, facts) -> bool:
         """A shared object stands for every real value bound to it: evaluate the instance for
