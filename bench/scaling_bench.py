@@ -11,7 +11,7 @@ block (placements there may collide: test-cfree fails and the solver samples aga
 Run: python bench/scaling_bench.py               # sizes 1..8, one run each (about a minute)
      python bench/scaling_bench.py --full        # 3 runs per size (medians), longer limits
      python bench/scaling_bench.py --sizes 1 2 3 --runs 3 --planner fd:opt
-     python bench/scaling_bench.py --redraws 4   # a rejected sample is redrawn at its level
+     python bench/scaling_bench.py --redraws 4 --accept-drawn   # see the solver's keywords
 """
 
 from __future__ import annotations
@@ -87,6 +87,7 @@ def run_once(n: int, args) -> tuple:
         initial_level=args.level,
         max_level=args.max_level,
         redraws=args.redraws,
+        accept_drawn=args.accept_drawn or None,
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())
@@ -114,6 +115,12 @@ def main() -> None:
         default=0,
         help="rejected draws a generator may redraw per level (the solver's redraws keyword)",
     )
+    ap.add_argument(
+        "--accept-drawn",
+        action="store_true",
+        help="a plan whose stream plan all succeeds is the solution, also with a suboptimal "
+        "planner (the solver's accept_drawn keyword)",
+    )
     args = ap.parse_args()
     args.sizes = args.sizes or list(range(1, 9))
     args.runs = args.runs or (3 if args.full else 1)
@@ -126,6 +133,7 @@ def main() -> None:
         f"planner {args.planner}, {args.runs} run(s) per size, medians"
         + (", with a blocker" if args.blockers else "")
         + (f", redraws {args.redraws}" if args.redraws else "")
+        + (", accept_drawn" if args.accept_drawn else "")
     )
     print(head)
     print("-" * len(head))

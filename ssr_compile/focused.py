@@ -350,6 +350,7 @@ def solve(
     eager_cost: float = EAGER_COST,
     eager_tests: bool = True,
     redraws: int = 0,
+    accept_drawn: bool | None = None,
     share: bool = False,
     state: ReplanState | None = None,
 ) -> Solution:
@@ -370,8 +371,10 @@ def solve(
     level without a sample (whose optimistic problem the planner may then have to prove
     unsolvable, at a cost exponential in the number of objects to arrange); off by default
     (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
-    When every result of a stream plan succeeds and the plan, with the values drawn, is valid
-    and costs no more than planned, it is the solution (no planner call to find it again).
+    ``accept_drawn``: when every result of a stream plan succeeds and the plan, with the
+    values drawn, is valid and costs no more than planned, it is the solution (no planner call
+    to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
+    cost bounds every plan of the level; a suboptimal one may find a cheaper plan on replanning.
     ``share``: instances with optimistic inputs share their optimistic outputs (see
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
@@ -397,6 +400,7 @@ def solve(
         eager_cost=eager_cost,
         eager_tests=eager_tests,
         redraws=redraws,
+        accept_drawn=accept_drawn,
         share=share,
     )
     return loop.run()
@@ -439,6 +443,7 @@ class _FocusedLoop:
         eager_cost: float,
         eager_tests: bool,
         redraws: int,
+        accept_drawn: bool | None,
         share: bool,
     ):
         from .planners import get_planner
@@ -468,6 +473,9 @@ class _FocusedLoop:
         self.best_failure = "no plan"
         self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
         self.redraws_per_level = max(int(redraws), 0)
+        if accept_drawn is None:
+            accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
+        self.accept_drawn = accept_drawn
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
         self.eager = {
             f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
@@ -614,7 +622,8 @@ class _FocusedLoop:
         self.compiled_objects = inst.objects
         self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
         done = self.evaluate_stream_plan(ordered, inst.shared)
-        if done is None and self.stream_plan_ok and not later and not inst.shared:
+        usable = self.accept_drawn and self.stream_plan_ok and not later and not inst.shared
+        if done is None and usable:
             done = self.bound_solution(compiled, plan, inst)
         return done
 

@@ -250,8 +250,8 @@ def test_cheap_tests_are_evaluated_before_planning_and_no_plan_rests_on_a_failed
 
 
 def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_drawn():
-    # the progress example: its last stream plan succeeds, and the plan with the values drawn
-    # is returned without another planner call; unified-planning's validator checks it
+    # the progress example: its last stream plan succeeds, and (accept_drawn) the plan with
+    # the values drawn is returned without another planner call; unified-planning's validator checks it
     # against the problem with the certified facts of the evaluated streams
     from dataclasses import replace
 
@@ -264,7 +264,7 @@ def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_d
     s = parse_stream_file((folder / "stream.pddl").read_text())
     p = parse_problem((folder / "problem.pddl").read_text())
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
-    sol = solve(d, s, p, module, progress=(said := []).append)
+    sol = solve(d, s, p, module, progress=(said := []).append, accept_drawn=True)
     assert sol.status == "solved", sol.message
     assert said[-1].strip() == "the plan holds with the values drawn"
     assert sol.stats.planner_calls == sol.stats.iterations
@@ -279,8 +279,19 @@ def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_d
         declare_stream_predicates(d, s), real, [(x.name, x.args) for x in sol.plan]
     )
     assert ok, why
-    again = solve(d, s, p, module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0))
+    again = solve(
+        d,
+        s,
+        p,
+        module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0),
+        accept_drawn=True,
+    )
     assert [str(x) for x in again.plan] == [str(x) for x in sol.plan] and again.cost == sol.cost
+    # by default only a cost-optimal planner's plan is taken as drawn (fd's is not)
+    said.clear()
+    module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
+    solve(d, s, p, module, progress=said.append)
+    assert not any("holds with the values drawn" in line for line in said)
 
 
 def test_rejected_draws_are_redrawn_at_their_level_and_the_plan_simulates():
