@@ -11,6 +11,7 @@ block (placements there may collide: test-cfree fails and the solver samples aga
 Run: python bench/scaling_bench.py               # sizes 1..8, one run each (about a minute)
      python bench/scaling_bench.py --full        # 3 runs per size (medians), longer limits
      python bench/scaling_bench.py --sizes 1 2 3 --runs 3 --planner fd:opt
+     python bench/scaling_bench.py --redraws 4 --accept-drawn   # see the solver's keywords
 """
 
 from __future__ import annotations
@@ -85,6 +86,8 @@ def run_once(n: int, args) -> tuple:
         time_limit=args.time_limit,
         initial_level=args.level,
         max_level=args.max_level,
+        redraws=args.redraws,
+        accept_drawn=args.accept_drawn or None,
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())
@@ -106,6 +109,18 @@ def main() -> None:
     ap.add_argument("--level", type=int, default=3)
     ap.add_argument("--max-level", type=int, default=8)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--redraws",
+        type=int,
+        default=0,
+        help="rejected draws a generator may redraw per level (the solver's redraws keyword)",
+    )
+    ap.add_argument(
+        "--accept-drawn",
+        action="store_true",
+        help="a plan whose stream plan all succeeds is the solution, also with a suboptimal "
+        "planner (the solver's accept_drawn keyword)",
+    )
     args = ap.parse_args()
     args.sizes = args.sizes or list(range(1, 9))
     args.runs = args.runs or (3 if args.full else 1)
@@ -114,7 +129,12 @@ def main() -> None:
         f"{'blocks':>6s} {'status':8s} {'time s':>8s} {'streams':>8s} {'planner':>8s} "
         f"{'length':>6s} {'cost':>8s} {'objects':>8s} {'facts':>7s}"
     )
-    print(f"planner {args.planner}, {args.runs} run(s) per size, medians" + (", with a blocker" if args.blockers else ""))
+    print(
+        f"planner {args.planner}, {args.runs} run(s) per size, medians"
+        + (", with a blocker" if args.blockers else "")
+        + (f", redraws {args.redraws}" if args.redraws else "")
+        + (", accept_drawn" if args.accept_drawn else "")
+    )
     print(head)
     print("-" * len(head))
     for n in args.sizes:

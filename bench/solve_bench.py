@@ -5,7 +5,11 @@ assertions).  By default one run of each small example (under a minute); ``--ful
 and the kitchen's tasks too.  ``size`` is the largest compiled problem of a run (objects/facts of
 the optimistic problem), when the solver reports it.
 
-Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer]
+Also pddlstream's continuous_tamp (its domain and stream files, read in place from the shared
+corpus when present, with the streams of ``tests/fixtures/ctamp``).  ``--option KEY=VALUE``
+passes a keyword to the solver (``share=1``, ``eager_tests=0``, ``eager_cost=-1``...).
+
+Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE]
 """
 
 from __future__ import annotations
@@ -36,8 +40,21 @@ FIXTURES = {
             "problems": ["problem.pddl", "problem-blocked.pddl"],
             "level": 3,
         },
-    )
+    ),
 }
+# pddlstream's continuous_tamp (domain and stream files from the shared corpus) with the
+# streams of tests/fixtures/ctamp; only when the corpus is there.
+CORPUS_CTAMP = ROOT.parent / "shared/corpus/pddlstream-examples/examples/continuous_tamp"
+if CORPUS_CTAMP.is_dir():
+    FIXTURES["continuous_tamp"] = (
+        ROOT / "tests/fixtures/ctamp",
+        {
+            "streams": str(ROOT / "tests/fixtures/ctamp/streams.py"),
+            "problems": ["problem.pddl"],
+            "domain_file": str(CORPUS_CTAMP / "domain.pddl"),
+            "stream_file": str(CORPUS_CTAMP / "stream.pddl"),
+        },
+    )
 
 
 LONG = {"kitchen"}  # examples only --full (or --only) runs
@@ -51,9 +68,11 @@ def examples():
     yield from FIXTURES.items()
 
 
-def run_once(folder: Path, config: dict, problem: str, defer: bool, time_limit: float):
-    d = parse_domain((folder / "domain.pddl").read_text())
-    s = parse_stream_file((folder / "stream.pddl").read_text())
+def run_once(
+    folder: Path, config: dict, problem: str, defer: bool, time_limit: float, options: dict
+):
+    d = parse_domain(Path(config.get("domain_file", folder / "domain.pddl")).read_text())
+    s = parse_stream_file(Path(config.get("stream_file", folder / "stream.pddl")).read_text())
     p = parse_problem((folder / problem).read_text())
     module = module_for_problem(config["streams"], folder / problem, 0, search=[ROOT])
     start = time.perf_counter()
@@ -67,6 +86,7 @@ def run_once(folder: Path, config: dict, problem: str, defer: bool, time_limit: 
         defer=defer,
         initial_level=int(config.get("level", 1)),
         max_level=int(config.get("max_level", 8)),
+        **options,
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())
@@ -101,7 +121,19 @@ def main() -> None:
         help="only this example (and problem); repeatable, e.g. --only tamp2d:problem-blocked",
     )
     ap.add_argument("--no-defer", action="store_true", help="only the runs without deferral")
+    ap.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a keyword of the solver, e.g. --option share=1 --option eager_tests=0",
+    )
     args = ap.parse_args()
+    options = {}
+    for o in args.option:
+        key, _, value = o.partition("=")
+        options[key] = float(value) if "." in value else int(value) if value.isdigit() else value
+    options = {k: bool(v) if k in ("share", "eager_tests") else v for k, v in options.items()}
     args.runs = args.runs or (5 if args.full else 1)
     head = (
         f"{'example':16s} {'problem':22s} {'defer':5s} {'status':8s} {'median s':>9s} "
@@ -120,7 +152,7 @@ def main() -> None:
                 rows = []
                 try:
                     rows = [
-                        run_once(folder, config, problem, defer, args.time_limit)
+                        run_once(folder, config, problem, defer, args.time_limit, options)
                         for _ in range(args.runs)
                     ]
                 except Exception as e:  # noqa: BLE001 - a broken example is a row, not a crash

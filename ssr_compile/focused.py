@@ -27,14 +27,15 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from . import syntax as S
-from .compile.instantiate import Instance, Result, real_function_terms
+from .compile.instantiate import Instance, Result, real_instances
 from .compile.pipeline import compile_problem
-from .errors import PlannerFailure, StreamError, StreamFailure
-from .preimage import plan_preimage, stream_plan
+from .errors import PlannerFailure, SSRError, StreamError, StreamFailure
+from .planners.costs import plan_cost
+from .preimage import PlanInvalid, plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
 
 SOLVED = "solved"
-# Cost functions at most this expensive (StreamInfo.cost) are evaluated eagerly.
+# Cost functions and tests at most this expensive (StreamInfo.cost) are evaluated eagerly.
 EAGER_COST = 0.1
 
 
@@ -347,6 +348,9 @@ def solve(
     progress: Callable[[str], None] | None = None,
     unit_cost: bool = False,
     eager_cost: float = EAGER_COST,
+    eager_tests: bool = True,
+    redraws: int = 0,
+    accept_drawn: bool | None = None,
     share: bool = False,
     state: ReplanState | None = None,
 ) -> Solution:
@@ -360,6 +364,17 @@ def solve(
     Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
     soon as their arguments are real (before planning), so the planner sees their real
     values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
+    With ``eager_tests``, so are the tests that cheap: a test that fails on real inputs is
+    never an optimistic fact the planner builds a plan on (one planner call per failed test).
+    ``redraws``: a generator whose draw a test of the same stream plan rejected may draw again
+    at the same level, up to this many times per instance and level, instead of leaving the
+    level without a sample (whose optimistic problem the planner may then have to prove
+    unsolvable, at a cost exponential in the number of objects to arrange); off by default
+    (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
+    ``accept_drawn``: when every result of a stream plan succeeds and the plan, with the
+    values drawn, is valid and costs no more than planned, it is the solution (no planner call
+    to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
+    cost bounds every plan of the level; a suboptimal one may find a cheaper plan on replanning.
     ``share``: instances with optimistic inputs share their optimistic outputs (see
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
@@ -383,6 +398,9 @@ def solve(
         progress=progress,
         unit_cost=unit_cost,
         eager_cost=eager_cost,
+        eager_tests=eager_tests,
+        redraws=redraws,
+        accept_drawn=accept_drawn,
         share=share,
     )
     return loop.run()
@@ -423,6 +441,9 @@ class _FocusedLoop:
         progress: Callable[[str], None] | None,
         unit_cost: bool,
         eager_cost: float,
+        eager_tests: bool,
+        redraws: int,
+        accept_drawn: bool | None,
         share: bool,
     ):
         from .planners import get_planner
@@ -450,9 +471,19 @@ class _FocusedLoop:
         }
         self.level = level
         self.best_failure = "no plan"
+        self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
+        self.redraws_per_level = max(int(redraws), 0)
+        if accept_drawn is None:
+            accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
+        self.accept_drawn = accept_drawn
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
         self.eager = {
             f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
+        }
+        self.eager_tests = {
+            s.name
+            for s in streams.streams
+            if eager_tests and s.is_test and module.info_for(s.name).cost <= eager_cost
         }
 
     def run(self) -> Solution:
@@ -499,10 +530,11 @@ class _FocusedLoop:
         return sol
 
     def evaluate_cheap_functions(self) -> None:
-        """The cheap cost functions over real arguments, once per new real result."""
-        if self.eager and len(self.ev.results) != self.eager_seen:
+        """The cheap cost functions and tests over real arguments, once per new real result
+        (a test that passes adds facts: again until none does)."""
+        while (self.eager or self.eager_tests) and len(self.ev.results) != self.eager_seen:
             self.eager_seen = len(self.ev.results)
-            _evaluate_eagerly(self.streams, self.problem, self.eager, self.ev)
+            _evaluate_eagerly(self.streams, self.problem, self.eager, self.eager_tests, self.ev)
 
     def compile(self):
         """The optimistic problem of this level, constrained by the inherited plan tail."""
@@ -536,7 +568,7 @@ class _FocusedLoop:
         )
         self.stats.planner_calls += 1
         self.stats.planner_time += result.time
-        size = _size(compiled.problem, getattr(self.backend, "last_operators", None))
+        size = _size(compiled, getattr(self.backend, "last_operators", None))
         self.stats.sizes.append(size)
         self.say(
             f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects, "
@@ -561,6 +593,7 @@ class _FocusedLoop:
             )
         self.level += 1
         self.ev.tried.clear()
+        self.redraws.clear()
         return None
 
     def use_plan(self, compiled, result) -> Solution | None:
@@ -586,8 +619,43 @@ class _FocusedLoop:
                 deferred=later,
             )
         ordered = order_stream_plan(now, self.module.info_for, _producers(now, inst))
+        self.compiled_objects = inst.objects
         self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
-        return self.evaluate_stream_plan(ordered, inst.shared)
+        done = self.evaluate_stream_plan(ordered, inst.shared)
+        usable = self.accept_drawn and self.stream_plan_ok and not later and not inst.shared
+        if done is None and usable:
+            done = self.bound_solution(compiled, plan, inst)
+        return done
+
+    def bound_solution(self, compiled, plan, inst) -> Solution | None:
+        """Every result of the stream plan succeeded: the plan with its optimistic objects
+        bound to their real values, when it is valid over the real facts and costs no more
+        than planned (optimistic costs are lower bounds: replanning would find it again,
+        after one more planner call); ``None``: plan again."""
+        binding = self.stream_plan_binding
+        bound = [(name, tuple(binding.get(a, a) for a in args)) for name, args in plan]
+        if any(a in inst.objects for _, args in bound for a in args):
+            return None
+        facts = {f for f in self.problem.init if isinstance(f, S.Atom)}
+        for r in self.ev.results:
+            facts.update(r.certified)
+        values = [v for v in self.problem.init if isinstance(v, S.InitValue)]
+        values += [S.InitValue(t, S.Num(v)) for t, v in self.ev.real_functions.items()]
+        real = replace(
+            compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values)
+        )
+        try:
+            pre = plan_preimage(compiled.source_domain, real, bound)
+            cost = plan_cost(compiled.source_domain, real, bound)
+            planned = plan_cost(compiled.source_domain, compiled.source_problem, plan)
+        except (PlanInvalid, SSRError):
+            return None
+        if not cost <= planned + 1e-9 or cost > self.max_cost:
+            return None
+        self.say("  the plan holds with the values drawn")
+        return self.finish(
+            SOLVED, _steps(bound, self.values, set()), cost, sorted(pre.static_facts, key=str)
+        )
 
     def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:
         """Evaluate the stream plan in order, binding optimistic objects to real values; a
@@ -601,6 +669,8 @@ class _FocusedLoop:
         # whose domain needs one of them is not evaluated (its domain does not hold), and
         # what it would certify is unproven too.
         failed_facts: set[S.Atom] = set()
+        self.stream_plan_ok = False
+        all_ok = True
         for res in ordered:
             if time.monotonic() >= self.deadline:
                 return self.finish(
@@ -612,18 +682,46 @@ class _FocusedLoop:
             ):
                 failed.update(res.outputs)
                 failed_facts.update(res.certified)
+                all_ok = False
                 continue
             if not shared or not any(x in shared for x in (*res.instance.inputs, *res.outputs)):
                 ok = self.ev.evaluate(res, binding)
                 self.ev.record(ok, res.instance.stream)
                 if not ok:
+                    all_ok = False
                     failed.update(res.outputs)
                     failed_facts.update(res.certified)
                     self.say(f"  {res.instance} failed")
+                    if res.instance.kind == "test":
+                        self.redraw_rejected(res, binding)
                 continue
             if not self.evaluate_shared(res, shared, binding, values_of, facts):
+                all_ok = False
                 failed.update(res.outputs)
+        self.stream_plan_ok = all_ok
+        self.stream_plan_binding = binding
         return None
+
+    def redraw_rejected(self, test: Result, binding: dict[str, str]) -> None:
+        """A test failed on a value a generator of this stream plan just drew: the draw was
+        rejected, so the generator may draw again at this level (at most ``redraws`` rejected
+        draws per instance and level) instead of leaving the level without that sample."""
+        inst = self.compiled_objects
+        for x in test.instance.inputs:
+            producer = inst.get(x)
+            if producer is None or producer.instance.kind != "stream":
+                continue
+            real = Instance(
+                producer.instance.stream,
+                tuple(binding.get(y, y) for y in producer.instance.inputs),
+                producer.instance.kind,
+            )
+            if real in self.ev.exhausted or real not in self.ev.tried:
+                continue
+            count = self.redraws.get(real, 0)
+            if count < self.redraws_per_level:
+                self.redraws[real] = count + 1
+                self.ev.tried.discard(real)
 
     def evaluate_shared(self, res, shared, binding, values_of, facts) -> bool:
         """A shared object stands for every real value bound to it: evaluate the instance for
@@ -671,11 +769,11 @@ class _RealFacts:
 
 
 def _evaluate_eagerly(
-    streams: S.StreamFile, problem: S.Problem, names: set[str], ev: _Evaluation
+    streams: S.StreamFile, problem: S.Problem, names: set[str], tests: set[str], ev: _Evaluation
 ) -> None:
-    """Evaluate the cheap cost-function terms (``names``) whose domain holds in the real facts
-    and that have no value yet."""
-    for inst in real_function_terms(streams, problem, ev.results, names):
+    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``) whose domain
+    holds in the real facts and that have no outcome yet."""
+    for inst in real_instances(streams, problem, ev.results, functions=names, tests=tests):
         if inst in ev.outcomes:
             continue
         res = Result(inst, (), (), (), 0)
@@ -735,9 +833,16 @@ def _producers(results: list[Result], inst) -> dict[int, list[int]]:
     return out
 
 
-def _size(problem: S.Problem, operators: int | None) -> tuple[int, int, int, int | None]:
+def _size(compiled, operators: int | None) -> tuple[int, int, int, int | None]:
+    """Objects, facts and function values of the optimistic problem, and the ground actions
+    of the planner's task (the planner's count, or the grounding pass's; ``None``: unknown)."""
+    problem = compiled.source_problem or compiled.problem
     facts = sum(1 for f in problem.init if isinstance(f, S.Atom))
-    return (len(problem.objects), facts, len(problem.init) - facts, operators)
+    grounded = compiled.lowered.grounded if compiled.lowered is not None else None
+    if operators is None and grounded is not None:
+        operators = len(grounded.domain.actions)
+    objects = len(problem.objects) + len(compiled.source_domain.constants if compiled.source_domain else ())
+    return (objects, facts, len(problem.init) - facts, operators)
 
 
 def _steps(plan, values: ValueTable, deferred_objects: set[str]) -> list[Step]:

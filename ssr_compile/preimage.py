@@ -85,7 +85,11 @@ class _SupportTracker:
         if isinstance(f, S.Exists | S.Forall):
             existential = isinstance(f, S.Exists) != negate
             support = set()
-            for binding in self.bindings(f.params, f.body):
+            # Only the bindings under which the body can decide the answer: for an
+            # existential, those where it can hold; for a universal, those where it can fail
+            # (the others hold trivially, with no support).
+            polarity = negate if existential else not negate
+            for binding in self.bindings(f.params, f.body, polarity):
                 ok, sup = self.holds(substitute(f.body, binding), negate)
                 if existential and ok:
                     return True, sup
@@ -132,12 +136,12 @@ class _SupportTracker:
                 support |= why
         return negate, frozenset(support)
 
-    def bindings(self, params: tuple[S.Typed, ...], body):
-        """Candidate bindings for quantified variables: joined from the body's positive atoms."""
+    def bindings(self, params: tuple[S.Typed, ...], body, negate: bool = False):
+        """Candidate bindings for quantified variables: those under which ``body`` (negated
+        if ``negate``) can be true, joined from the state atoms that must then hold; every
+        object combination when those atoms do not bind all the variables."""
         names = [p.name for p in params]
-        positives = [
-            x for x in S.conjuncts(body) if isinstance(x, S.Atom) and x.pred not in self.axioms
-        ]
+        positives = self._guards(body, negate, [])
         covered = {t.name for x in positives for t in x.args if isinstance(t, S.Var)}
         if positives and set(names) <= covered:
             seen = set()
@@ -150,6 +154,22 @@ class _SupportTracker:
             return
         for combo in itertools.product(self.objects, repeat=len(names)):
             yield {n: S.Const(v) for n, v in zip(names, combo)}
+
+    def _guards(self, f, negate: bool, out: list) -> list:
+        """Atoms of the state (not derived, not equalities) that must all be true for ``f``
+        (negated if ``negate``) to be true."""
+        if isinstance(f, S.Atom):
+            if not negate and f.pred != "=" and f.pred not in self.axioms:
+                out.append(f)
+        elif isinstance(f, S.Not):
+            self._guards(f.arg, not negate, out)
+        elif isinstance(f, S.And) and not negate or isinstance(f, S.Or) and negate:
+            for part in f.args:
+                self._guards(part, negate, out)
+        elif isinstance(f, S.Imply) and negate:  # not (A -> B) = A and not B
+            self._guards(f.left, False, out)
+            self._guards(f.right, True, out)
+        return out
 
     def _join(self, atoms, binding):
         if not atoms:
@@ -208,9 +228,9 @@ def _apply(effect, state: set[S.Atom], ev: _SupportTracker, adds: set, dels: set
         if ok:
             _apply(effect.effect, state, ev, adds, dels, costs)
     elif isinstance(effect, S.Forall):
-        for binding in ev.bindings(
-            effect.params, effect.body.condition if isinstance(effect.body, S.When) else effect.body
-        ):
+        # A conditional effect fires where its condition holds; an unconditional one everywhere.
+        guard = effect.body.condition if isinstance(effect.body, S.When) else None
+        for binding in ev.bindings(effect.params, guard):
             _apply(substitute(effect.body, binding), state, ev, adds, dels, costs)
     elif isinstance(effect, S.NumericEffect):
         if isinstance(effect.value, S.FuncTerm):

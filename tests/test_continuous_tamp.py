@@ -1,7 +1,9 @@
 """pddlstream's own continuous_tamp domain and stream files (from the shared corpus, read in
 place) with streams written for our API (tests/fixtures/ctamp): two blocks into the goal
-region.  The Focused solver with a planner that takes the ground task finds it; each step is
-checked against the 1-D geometry here.  About 20 s (marked slow: deselect with -m "not slow")."""
+region.  The Focused solver finds it with a planner that takes the ground task (pyperplan) and
+with one that takes the lifted task (Fast Downward, whose translator meets the domain's
+universal precondition); each step is checked against the 1-D geometry here.  A few seconds
+(marked slow: deselect with -m "not slow")."""
 
 from __future__ import annotations
 
@@ -18,13 +20,14 @@ FIXTURE = Path(__file__).parent / "fixtures" / "ctamp"
 
 
 @pytest.mark.slow
-def test_two_blocks_into_the_goal_region_with_pyperplan():
+@pytest.mark.parametrize("planner", ["pyperplan", "fd"])
+def test_two_blocks_into_the_goal_region(planner):
     corpus = require_corpus("pddlstream-examples/examples/continuous_tamp")
     domain = parse_file(corpus / "domain.pddl")
     streams = parse_file(corpus / "stream.pddl")
     problem = parse_file(FIXTURE / "problem.pddl")
     module = load_streams_module(str(FIXTURE / "streams.py"))
-    sol = solve(domain, streams, problem, module, planner="pyperplan", time_limit=120)
+    sol = solve(domain, streams, problem, module, planner=planner, time_limit=120)
     assert sol.solved, sol.message
     lo, hi = module.module.REGIONS["goal"]
     placed = {}

@@ -232,3 +232,73 @@ def test_cheap_functions_are_evaluated_eagerly_and_the_plan_is_as_cheap():
     assert lazy.status == eager.status == "solved"
     assert eager.cost <= lazy.cost + 1e-9
     assert eager.stats.planner_calls <= lazy.stats.planner_calls
+
+
+@pytest.mark.parametrize("problem", ["problem.pddl", "problem-blocked.pddl"])
+def test_cheap_tests_are_evaluated_before_planning_and_no_plan_rests_on_a_failed_one(problem):
+    module, eager = run(problem, progress=(said := []).append)
+    _, lazy = run(problem, eager_tests=False)
+    assert lazy.status == eager.status == "solved"
+    assert eager.cost <= lazy.cost + 1e-9
+    assert eager.stats.planner_calls <= lazy.stats.planner_calls
+    values, b_pose = _values_with_b(module, problem)
+    _simulate(eager.plan, values, {"a": values["pa"], "b": values[b_pose]})
+    # a test over real inputs is evaluated before any plan can count on it: a stream plan's
+    # test failing on real inputs would have been found eagerly
+    assert not any("test-cfree" in line and line.endswith("failed") for line in said
+                   if "opt" not in line)
+
+
+def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_drawn():
+    # the progress example: its last stream plan succeeds, and (accept_drawn) the plan with
+    # the values drawn is returned without another planner call; unified-planning's validator checks it
+    # against the problem with the certified facts of the evaluated streams
+    from dataclasses import replace
+
+    from ssr_compile.compile.instantiate import declare_stream_predicates
+    from ssr_compile.planners.validate import validate_plan
+    from ssr_compile.stream import module_for_problem
+
+    folder = Path(__file__).parent.parent / "domains" / "pddl" / "progress"
+    d = parse_domain((folder / "domain.pddl").read_text())
+    s = parse_stream_file((folder / "stream.pddl").read_text())
+    p = parse_problem((folder / "problem.pddl").read_text())
+    module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
+    sol = solve(d, s, p, module, progress=(said := []).append, accept_drawn=True)
+    assert sol.status == "solved", sol.message
+    assert said[-1].strip() == "the plan holds with the values drawn"
+    assert sol.stats.planner_calls == sol.stats.iterations
+    assert not any(a.startswith("opt") for step in sol.plan for a in step.args)
+    facts = [f for r in sol.evaluated for f in r.certified]
+    names = {o.name for o in p.objects} | {c.name for c in d.constants}
+    extra = sorted({a.name for f in facts for a in f.args} - names)
+    real = replace(
+        p, objects=p.objects + tuple(S.Typed(n) for n in extra), init=p.init + tuple(facts)
+    )
+    ok, why = validate_plan(
+        declare_stream_predicates(d, s), real, [(x.name, x.args) for x in sol.plan]
+    )
+    assert ok, why
+    again = solve(
+        d,
+        s,
+        p,
+        module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0),
+        accept_drawn=True,
+    )
+    assert [str(x) for x in again.plan] == [str(x) for x in sol.plan] and again.cost == sol.cost
+    # by default only a cost-optimal planner's plan is taken as drawn (fd's is not)
+    said.clear()
+    module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
+    solve(d, s, p, module, progress=said.append)
+    assert not any("holds with the values drawn" in line for line in said)
+
+
+def test_rejected_draws_are_redrawn_at_their_level_and_the_plan_simulates():
+    module, sol = run("problem-blocked.pddl", redraws=2)
+    assert sol.status == "solved", sol.message
+    values, b_pose = _values_with_b(module, "problem-blocked.pddl")
+    _simulate(sol.plan, values, {"a": values["pa"], "b": values[b_pose]})
+    _, again = run("problem-blocked.pddl", redraws=2)
+    assert [str(s) for s in again.plan] == [str(s) for s in sol.plan]
+    assert again.stats.planner_calls == sol.stats.planner_calls

@@ -292,7 +292,22 @@ def real_function_terms(
 ) -> list[Instance]:
     """The cost-function terms (of the functions ``names``, default all) whose domain holds
     in the real facts alone: the problem's and those of the ``evaluated`` results."""
-    wanted = None if names is None else set(names)
+    return real_instances(streams, problem, evaluated, functions=names, tests=())
+
+
+def real_instances(
+    streams: S.StreamFile,
+    problem: S.Problem,
+    evaluated: Iterable[Result] = (),
+    *,
+    functions: Iterable[str] | None = None,
+    tests: Iterable[str] | None = None,
+) -> list[Instance]:
+    """The instances of the cost functions ``functions`` and of the tests ``tests`` (``None``:
+    all of them) whose domain holds in the real facts alone: the problem's and those of the
+    ``evaluated`` results.  Functions first, each in the order of a join over the facts."""
+    wanted_functions = None if functions is None else set(functions)
+    wanted_tests = None if tests is None else set(tests)
     levels: dict[S.Atom, int] = {}
     index: dict[str, list[S.Atom]] = defaultdict(list)
 
@@ -312,10 +327,15 @@ def real_function_terms(
     _apply_rules(streams, index, add_fact, levels)
     out = []
     for fn in streams.functions:
-        if wanted is not None and fn.name not in wanted:
+        if wanted_functions is not None and fn.name not in wanted_functions:
             continue
         for binding, _facts in _matches(fn.params, fn.domain, index, levels):
             out.append(Instance(fn.name, tuple(binding[p.name] for p in fn.params), "function"))
+    for stream in streams.streams:
+        if not stream.is_test or (wanted_tests is not None and stream.name not in wanted_tests):
+            continue
+        for binding, _facts in _matches(stream.inputs, stream.domain, index, levels):
+            out.append(Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), "test"))
     return out
 
 

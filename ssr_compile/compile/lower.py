@@ -6,7 +6,8 @@ negative preconditions, disjunction, quantifiers, conditional effects, a ground 
 rewrites the plain domain and problem to fit, running the steps it needs in this order, each a
 pass with the common contract (:class:`~.result.PassResult`):
 
-* ground task -> the relaxed-reachable ground actions (:mod:`.ground`);
+* ground task -> the relaxed-reachable ground actions (:mod:`.ground`); a lifted task keeps
+  its quantifiers, guarded by each action's static atoms (:mod:`.guards`);
 * axioms  -> derived predicates inlined (:mod:`.derived`);
 * quantifiers -> expanded over the problem's objects (respecting types) (:mod:`.quantifiers`);
 * disjunction / ``imply`` -> each action split into one copy per disjunct of its precondition's
@@ -34,6 +35,7 @@ from .derived import compile_away, normalise_axiom_bodies
 from .disjunctions import GOAL_ACTION, GOAL_REACHED, split_disjunctions  # noqa: F401
 from .formulas import has, map_atoms
 from .ground import Grounded, ground
+from .guards import guard_quantifiers
 from .negations import DISTINCT, remove_negations  # noqa: F401
 from .quantifiers import MAX_EXPANSION, expand_quantifiers, objects_by_type  # noqa: F401
 from .rename import Renamed, Renaming, rename_task
@@ -83,6 +85,8 @@ def lower(
     steps: list[PassResult] = [PassResult(normalise_axiom_bodies(domain), problem)]
     if getattr(caps, "ground", False):
         steps.append(ground(*steps[-1].task, conditional_effects=caps.conditional_effects))
+    elif caps.quantifiers:
+        steps.append(guard_quantifiers(*steps[-1].task))
     if not caps.axioms:
         steps.append(compile_away(*steps[-1].task))
     if not caps.quantifiers:
