@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from . import syntax as S
-from .compile.instantiate import Instance, Result, real_instances
+from .compile.instantiate import Instance, Result, ground_atom, real_instances
 from .compile.pipeline import compile_problem
 from .errors import PlannerFailure, SSRError, StreamError, StreamFailure
 from .planners.costs import plan_cost
@@ -223,19 +223,13 @@ class _Evaluation:
 def _real_result(
     inst: Instance, outputs, decl: S.Stream, mapping: dict[str, str], level: int
 ) -> Result:
-    certified = []
-    for a in S.conjuncts(decl.certified):
-        if isinstance(a, S.Atom):
-            certified.append(
-                S.Atom(a.pred, tuple(S.Const(mapping.get(t.name, t.name)) for t in a.args))
-            )
-    domain = []
-    for a in S.conjuncts(decl.domain):
-        if isinstance(a, S.Atom):
-            domain.append(
-                S.Atom(a.pred, tuple(S.Const(mapping.get(t.name, t.name)) for t in a.args))
-            )
-    return Result(inst, tuple(outputs), tuple(certified), tuple(domain), level, optimistic=False)
+    certified = tuple(
+        ground_atom(a, mapping) for a in S.conjuncts(decl.certified) if isinstance(a, S.Atom)
+    )
+    domain = tuple(
+        ground_atom(a, mapping) for a in S.conjuncts(decl.domain) if isinstance(a, S.Atom)
+    )
+    return Result(inst, tuple(outputs), certified, domain, level, optimistic=False)
 
 
 def order_stream_plan(

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 from . import syntax as S
 from .compile.formulas import substitute
-from .compile.instantiate import Instantiation, Result
+from .compile.instantiate import Instantiation, Result, unify
 from .errors import SSRError
 
 Plan = Sequence[tuple[str, Sequence[str]]]
@@ -177,18 +177,8 @@ class _SupportTracker:
             return
         first, rest = atoms[0], atoms[1:]
         for fact in self.index.get(first.pred, ()):
-            new = dict(binding)
-            ok = True
-            for p, v in zip(first.args, fact.args):
-                if isinstance(p, S.Var):
-                    if p.name in new and new[p.name] != v.name:
-                        ok = False
-                        break
-                    new[p.name] = v.name
-                elif p.name != v.name:
-                    ok = False
-                    break
-            if ok and len(first.args) == len(fact.args):
+            new = unify(first, fact, binding)
+            if new is not None:
                 yield from self._join(rest, new)
 
 

@@ -225,7 +225,7 @@ def instantiate(
                 full[o.name] = name
                 outputs.append(name)
             certified = tuple(
-                _ground(a, full) for a in S.conjuncts(stream.certified) if isinstance(a, S.Atom)
+                ground_atom(a, full) for a in S.conjuncts(stream.certified) if isinstance(a, S.Atom)
             )
             res = Result(inst, tuple(outputs), certified, tuple(dom_facts), inst_level)
             out.results.append(res)
@@ -371,15 +371,18 @@ def _apply_rules(streams, index, add_fact, levels) -> None:
             for binding, dom_facts in _matches(rule.inputs, rule.domain, index, levels):
                 lvl = max((levels[f] for f in dom_facts), default=0)
                 for a in S.conjuncts(rule.certified):
-                    if isinstance(a, S.Atom) and add_fact(_ground(a, binding), lvl):
+                    if isinstance(a, S.Atom) and add_fact(ground_atom(a, binding), lvl):
                         changed = True
 
 
-def _ground(atom: S.Atom, binding: Mapping[str, str]) -> S.Atom:
+def ground_atom(atom: S.Atom, binding: Mapping[str, str]) -> S.Atom:
+    """``atom`` with its variables replaced by the objects ``binding`` gives them (the one
+    grounding of stream facts: optimistic here, real in the Focused solver)."""
     return S.Atom(
         atom.pred,
         tuple(
-            S.Const(binding[t.name]) if isinstance(t, S.Var) else S.Const(t.name) for t in atom.args
+            S.Const(binding.get(t.name, t.name)) if isinstance(t, S.Var) else S.Const(t.name)
+            for t in atom.args
         ),
     )
 
@@ -411,7 +414,7 @@ def _matches(params, domain, index, levels, fresh=None):
             return
         pattern = order[i]
         for fact in list(index.get(pattern.pred, ())):
-            new = _unify(pattern, fact, binding)
+            new = unify(pattern, fact, binding)
             if new is not None:
                 used.append(fact)
                 yield from extend(order, i + 1, new, used)
@@ -428,7 +431,7 @@ def _matches(params, domain, index, levels, fresh=None):
     for k, pivot in enumerate(order):
         rest = order[:k] + order[k + 1 :]
         for fact in by_pred.get(pivot.pred, ()):
-            start = _unify(pivot, fact, {})
+            start = unify(pivot, fact, {})
             if start is None:
                 continue
             for binding, used in extend(rest, 0, start, []):
@@ -436,7 +439,9 @@ def _matches(params, domain, index, levels, fresh=None):
                 yield binding, used
 
 
-def _unify(pattern: S.Atom, fact: S.Atom, binding: dict[str, str]) -> dict[str, str] | None:
+def unify(pattern: S.Atom, fact: S.Atom, binding: dict[str, str]) -> dict[str, str] | None:
+    """``binding`` extended so that ``pattern`` matches the ground ``fact`` (a new dict only when
+    something is added), or None when they do not match."""
     if len(pattern.args) != len(fact.args):
         return None
     new = binding
