@@ -174,6 +174,10 @@ class KitchenAgent:
         assert k is not None, "update(None, observation) first"
         problem, values = state_problem(self.task, k)
         self.km.drawers = dict(k.drawers)
+        held = None if k.held is None else k.held[0]
+        self.km.obstacles = {
+            o: pb for o, pb in k.beliefs.items() if o != held and is_localized(pb)
+        }
         module = StreamsModule(
             "ssr_compile.streams.kitchen_module",
             streams=self.km.streams(),

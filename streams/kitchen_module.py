@@ -85,6 +85,8 @@ class KitchenModule:
         self.n_objects = max(1, len(task.prior))
         self._frames = {s: self._canonical_frame(s) for s in self.world.surfaces}
         self._seeable_cache: dict = {}
+        # localized objects at rest and their beliefs (set by a closed-loop agent each cycle)
+        self.obstacles: dict[str, PoseBelief] = {}
 
     # -- planning state -------------------------------------------------------------------
     def _canonical_frame(self, surface: str):
@@ -249,7 +251,13 @@ class KitchenModule:
             return self.ks.plan_base_motion(q1, q2)
 
     def plan_arm_motion(self, bq, q1, q2):
-        with self.planning():
+        """An arm motion that also avoids the objects the robot has localized where it believes
+        they are (:attr:`obstacles`): the arm leaving an object it just placed must not sweep
+        through it, which the true world refuses (and a replan would try the same path again)."""
+        with self.planning() as w:
+            for o, pb in sorted(self.obstacles.items()):
+                p = self.obj_pose(pb)
+                w.place_object(o, p.surface, p.rel)
             return self.ks.plan_arm_motion(bq, q1, q2)
 
     def sample_drawer_base(self, d: str):

@@ -161,3 +161,34 @@ def test_a_drawer_below_an_open_one_is_planned_with_the_upper_one_closed():
         assert km.drawers["top_drawer"] == DRAWER_TRAVEL  # the robot's knowledge is untouched
     finally:
         ep.close()
+
+
+def test_arm_motions_avoid_the_objects_the_robot_has_localized():
+    # Stow: after placing the sugar box, the planned way back to tuck swept through it (arm
+    # motions were planned in a world without movable objects); the true world refused it and
+    # every replan tried the same path again.  The agent's localized objects are obstacles.
+    ep = make_episode("stow", 0)
+    try:
+        agent = ep.agent
+        agent.update(None, ep.environment.observe())
+        agent.problem()
+        km = agent.km
+        assert set(km.obstacles) == {"block", "sugar_box"}
+        seen = {}
+
+        def record(bq, q1, q2):
+            w = km.world
+            seen["present"] = sorted(w.present())
+            seen["at"] = {o: w.object_pose(o)[0] for o in w.present()}
+            return None
+
+        km.ks.plan_arm_motion = record
+        km.plan_arm_motion((0.0, 0.0, 0.0), (0.0,) * 7, (0.0,) * 7)
+        assert seen["present"] == ["block", "sugar_box"]
+        for o in ("block", "sugar_box"):
+            est = agent.known.beliefs[o].point_estimate()[1]
+            if o == "block":  # on the counter: where the belief puts it
+                assert np.allclose(seen["at"][o][:2], est[:2], atol=1e-6)
+        assert km.world.present() == []  # only while planning
+    finally:
+        ep.close()
