@@ -87,6 +87,10 @@ class KitchenModule:
         self._seeable_cache: dict = {}
         # localized objects at rest and their beliefs (set by a closed-loop agent each cycle)
         self.obstacles: dict[str, PoseBelief] = {}
+        # drawer motions planned so far (a replan from the arm configuration an earlier plan
+        # moved to for one of them takes it again: solved anew from there, the redundant arm's
+        # IK may not find a path that starts there, and the robot went back and forth)
+        self._drawer_motions: list = []
 
     # -- planning state -------------------------------------------------------------------
     def _canonical_frame(self, surface: str):
@@ -264,6 +268,12 @@ class KitchenModule:
         return self._each(lambda: self.ks.sample_drawer_base(d), moving=d)
 
     def _drawer_motion(self, d: str, a1, a2, bq, start=None):
+        key = (d, a1[1], a2[1], tuple(bq), tuple(sorted(self.drawers.items())))
+        if start is not None:
+            # The arm is where an earlier plan put it for this very motion: that motion.
+            for k, m in self._drawer_motions:
+                if k == key and self._snap(m.arm_path, start) is not None:
+                    return DrawerMotion(d, self._snap(m.arm_path, start), m.drawer_path)
         with self.planning(moving=d):
             self.world.set_drawer(d, a1[1])
             if not self._reachable(bq, self.world.handle_pose(d)):
@@ -272,7 +282,9 @@ class KitchenModule:
                 m = self.ks.plan_drawer(d, a1[1], a2[1], bq, seed=start)
                 path = self._snap(None if m is None else m.arm_path, start)
                 if path is not None:
-                    return DrawerMotion(d, tuple(path), m.drawer_path)
+                    motion = DrawerMotion(d, tuple(path), m.drawer_path)
+                    self._drawer_motions.append((key, motion))
+                    return motion
         return None
 
     def _plan_drawer(self, d: str, a1, a2, bq):

@@ -192,3 +192,33 @@ def test_arm_motions_avoid_the_objects_the_robot_has_localized():
         assert km.world.present() == []  # only while planning
     finally:
         ep.close()
+
+
+def test_a_drawer_motion_starts_from_the_arm_configuration_planned_for_it():
+    # Stow: after moving the arm to the push's approach, the replan solved the push anew from
+    # there and found no path starting there (a redundant arm), so the robot went back to tuck
+    # and forth for 80 cycles.  The motion planned for that approach is taken again.
+    import itertools
+
+    ep = make_episode("stow", 0)
+    try:
+        km = ep.agent.km
+        km.drawers = {"top_drawer": DRAWER_TRAVEL, "bottom_drawer": 0.0}
+        a1, a2 = ("top_drawer", DRAWER_TRAVEL), ("top_drawer", 0.0)
+        for (bq,) in itertools.islice(km.sample_drawer_base("top_drawer"), 3):
+            here = km._plan_drawer("top_drawer", a1, a2, bq)
+            if here is None:
+                continue
+            aq1, aq2, motion = here
+            after = km._plan_drawer_from("top_drawer", a1, a2, bq, tuple(aq1))
+            assert after is not None
+            assert after[1].arm_path == motion.arm_path and tuple(after[0]) == tuple(aq2)
+            # from anywhere else, no motion is made up
+            far = tuple(v + 0.5 for v in aq1)
+            again = km._plan_drawer_from("top_drawer", a1, a2, bq, far)
+            assert again is None or np.allclose(again[1].arm_path[0], far)
+            break
+        else:
+            pytest.fail("no push planned from three drawer bases")
+    finally:
+        ep.close()
