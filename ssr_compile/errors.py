@@ -71,6 +71,11 @@ class UnsupportedError(SSRError):
     label = "unsupported"
 
 
+class InstanceCapReached(UnsupportedError):
+    """Optimistic instantiation passed its cap on stream instances (a resource limit: the
+    Focused solver stops raising the level there)."""
+
+
 class StreamError(SSRError):
     """A streams module is missing, fails to import, or lacks a declared stream."""
 

@@ -29,7 +29,7 @@ from typing import Any
 from . import syntax as S
 from .compile.instantiate import Instance, Result, ground_atom, real_instances
 from .compile.pipeline import compile_problem
-from .errors import PlannerFailure, SSRError, StreamError, StreamFailure
+from .errors import InstanceCapReached, PlannerFailure, SSRError, StreamError, StreamFailure
 from .planners.costs import plan_cost
 from .preimage import PlanInvalid, plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
@@ -464,6 +464,7 @@ class _FocusedLoop:
             if module.info_for(f.name).optimistic_value is not None
         }
         self.level = level
+        self.first_level = level
         self.best_failure = "no plan"
         self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
         self.redraws_per_level = max(int(redraws), 0)
@@ -491,7 +492,18 @@ class _FocusedLoop:
             self.stats.iterations += 1
             self.stats.levels.append(self.level)
             self.evaluate_cheap_functions()
-            compiled = self.compile()
+            try:
+                compiled = self.compile()
+            except InstanceCapReached as e:
+                if self.level <= self.first_level:
+                    raise
+                # A resource limit, like the last level: no plan up to the level before.
+                took = time.monotonic() - self.start
+                return self.finish(
+                    "unsolvable",
+                    message=f"no plan found up to level {self.level - 1} in {took:.1f} s; "
+                    f"level {self.level} would pass the cap ({e.message})",
+                )
             result, bound = self.plan(compiled)
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)

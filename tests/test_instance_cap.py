@@ -43,3 +43,27 @@ def test_the_cap_stops_the_join_as_soon_as_it_is_passed(monkeypatch):
         compile_problem(ex.domain, ex.streams, problem, level=1)
     # 60 blocks x 60 poses x ... candidate bindings exist; the join stopped right after 51
     assert drawn <= 52
+
+
+def test_the_focused_solver_stops_raising_the_level_at_the_cap(monkeypatch):
+    # A resource limit, like the last level: "no plan up to the level before", not a crash of
+    # the whole solve (a kitchen episode ended on it); at the first level it is still an error.
+    from pathlib import Path
+
+    from ssr_compile.focused import solve
+    from ssr_compile.parse import parse_file
+    from ssr_compile.stream import from_module
+    from ssr_compile.streams import tamp2d
+
+    folder = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "tamp2d"
+    domain, streams = parse_file(folder / "domain.pddl"), parse_file(folder / "stream.pddl")
+    problem = parse_file(folder / "problem-blocked.pddl")
+    first = compile_problem(domain, streams, problem, level=1)
+    cap = len(first.instantiation.results) + 1  # level 1 fits, a higher level does not
+    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", cap)
+    sol = solve(domain, streams, problem, from_module(tamp2d), time_limit=60)
+    assert sol.status == "unsolvable", sol.message
+    assert "would pass the cap" in sol.message and "up to level 1 " in sol.message
+    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 1)
+    with pytest.raises(UnsupportedError, match="more than 1 stream instances at level 1"):
+        solve(domain, streams, problem, from_module(tamp2d), time_limit=60)

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
 from ..check import atoms
-from ..errors import UnsupportedError
+from ..errors import InstanceCapReached, UnsupportedError
 from .result import PassResult
 
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
@@ -197,7 +197,7 @@ def instantiate(
                     continue
                 seen.add(inst)
                 if len(seen) > MAX_INSTANCES:  # while building, not after the whole depth
-                    raise UnsupportedError(
+                    raise InstanceCapReached(
                         f"optimistic instantiation made more than {MAX_INSTANCES} stream "
                         f"instances at level {depth}; lower the level or restrict the stream "
                         "domains"
