@@ -105,7 +105,7 @@ class KitchenModule:
         """The planning state: movable objects out, drawers at the openings the robot saw
         (``open_drawer`` open: something in it is reached); ``moving``: a drawer about to be
         pulled or pushed.  The drawers above either are closed, as the domain guarantees then
-        (``blocked``, ``accessible``)."""
+        (``covered``, in ``accessible`` and in pull/push)."""
         w = self.world
         above = {d1 for d1, d2 in ABOVE if d2 in (moving, open_drawer)}
         with w.saved():

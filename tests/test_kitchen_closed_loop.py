@@ -3,6 +3,8 @@ the online policy (Algorithm 1), and the faults the issue lists."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from ssr_compile.sim.world import DRAWER_TRAVEL
@@ -146,10 +148,8 @@ def test_long_tasks_in_closed_loop(task, minutes):
 
 def test_a_drawer_below_an_open_one_is_planned_with_the_upper_one_closed():
     # Swap: with both drawers open, the bottom one can only move once the top one is closed
-    # (the domain's `blocked`), so its base and its push are planned in that state -- planned in
+    # (the domain's `covered`), so its base and its push are planned in that state -- planned in
     # the state as seen, no base was ever found and the replan had no relaxed solution.
-    import itertools
-
     ep = make_episode("swap", 0)
     try:
         km = ep.agent.km
@@ -198,8 +198,6 @@ def test_a_drawer_motion_starts_from_the_arm_configuration_planned_for_it():
     # Stow: after moving the arm to the push's approach, the replan solved the push anew from
     # there and found no path starting there (a redundant arm), so the robot went back to tuck
     # and forth for 80 cycles.  The motion planned for that approach is taken again.
-    import itertools
-
     ep = make_episode("stow", 0)
     try:
         km = ep.agent.km
