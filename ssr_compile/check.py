@@ -425,6 +425,7 @@ def check_domain(
                     v.span,
                 )
         fc.formula(ax.body, head | frozenset(extra), where)
+        _unbound_head(report, ax, where)
     for a in domain.actions:
         where = f"action '{a.name}'"
         fc.params(a.parameters, where)
@@ -649,6 +650,37 @@ def undeclared_domain_names(domain: S.Domain) -> dict[str, S.Span | None]:
     for ax in domain.axioms:
         fc.formula(ax.body, frozenset(p.name for p in ax.parameters), "an axiom")
     return fc.domain_names
+
+
+def _unbound_head(report: Report, ax: S.Axiom, where: str) -> None:
+    """Warn when a disjunct of an axiom body leaves an untyped head parameter without a
+    positive atom to bind it: a grounding translator (Fast Downward's) then instantiates the
+    derived atom over every object of the problem -- on a compiled optimistic problem, over
+    thousands of optimistic values."""
+    untyped = [p.name for p in ax.parameters if p.type in (None, "object")]
+    if not untyped:
+        return
+    body = ax.body
+    disjuncts = body.args if isinstance(body, S.Or) else (body,)
+    for i, d in enumerate(disjuncts, 1):
+        while isinstance(d, S.Exists):
+            d = d.body
+        bound = {
+            t.name
+            for c in S.conjuncts(d)
+            if isinstance(c, S.Atom) and c.pred != "="
+            for t in c.args
+            if isinstance(t, S.Var)
+        }
+        missing = [v for v in untyped if v not in bound]
+        if missing:
+            part = f"disjunct {i} of {where}" if len(disjuncts) > 1 else where
+            report.warn(
+                f"{part} does not bind {', '.join(missing)} with a positive atom: a grounding "
+                "planner instantiates it over every object (add an atom that names "
+                f"{', '.join(missing)})",
+                getattr(d, "span", None) or ax.span,
+            )
 
 
 def variables(f) -> list[S.Var]:

@@ -190,6 +190,7 @@ class Cycle:
     constrained_time: float = 0.0  # planning time of the constrained attempt alone
     unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
     comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
+    plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
 
     def as_dict(self) -> dict:
         d = dict(vars(self))
@@ -497,6 +498,7 @@ def _record(
     deferred = len(solution.deferred) if solution is not None else 0
     plan_len = len(solution.plan) if solution is not None and solution.plan is not None else None
     cost = solution.cost if solution is not None and solution.solved else None
+    plan = [str(s) for s in solution.plan] if plan_len is not None else None
     record = Cycle(
         index,
         action,
@@ -510,6 +512,7 @@ def _record(
         agent.summary(),
         constrained_time=spent["c"],
         unconstrained_time=spent["u"],
+        plan=plan,
     )
     record.overhead_time = max(time.monotonic() - cycle_start - record.planning_time, 0.0)
     return record

@@ -50,10 +50,11 @@ def test_the_focused_solver_stops_raising_the_level_at_the_cap(monkeypatch):
     # the whole solve (a kitchen episode ended on it); at the first level it is still an error.
     from pathlib import Path
 
+    from ssr_compile.streams import tamp2d
+
     from ssr_compile.focused import solve
     from ssr_compile.parse import parse_file
     from ssr_compile.stream import from_module
-    from ssr_compile.streams import tamp2d
 
     folder = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "tamp2d"
     domain, streams = parse_file(folder / "domain.pddl"), parse_file(folder / "stream.pddl")

@@ -8,9 +8,9 @@ import itertools
 import numpy as np
 import pytest
 from ssr_compile.sim.world import DRAWER_TRAVEL
+from ssr_compile.streams.kitchen_env import KitchenObservation, make_episode
 
 from ssr_compile.policy import Agent, Environment, PolicySettings, run_policy
-from ssr_compile.streams.kitchen_env import KitchenObservation, make_episode
 
 FAST = PolicySettings(variant="both", budget=120, constrained_time=10, unconstrained_time=60,
                       max_cycles=30)  # fmt: skip

@@ -37,8 +37,9 @@ def test_solve_folder_inspect(capsys):
 
 def test_a_copy_of_a_kitchen_problem_under_another_name_is_served(tmp_path):
     """The task comes from the problem's own name (kitchen-<task>-<seed>), not its file name."""
-    from ssr_compile.resources import domains_dir
     from ssr_compile.streams.kitchen_example import task_name
+
+    from ssr_compile.resources import domains_dir
 
     copy = tmp_path / "my-inspect.pddl"
     copy.write_text((domains_dir() / "kitchen" / "problem-swap.pddl").read_text())

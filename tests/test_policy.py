@@ -9,9 +9,9 @@ from __future__ import annotations
 import json
 
 import pytest
-from ssr_compile import syntax as S
 from ssr_compile.streams import belief_detect, progress
 
+from ssr_compile import syntax as S
 from ssr_compile.cli import main
 from ssr_compile.policy import (
     Episode,

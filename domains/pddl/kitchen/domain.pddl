@@ -43,7 +43,9 @@
   (:functions (obscost ?o ?pb ?obs) (total-cost) - number)
 
   ; paper §IV-A: the region of ?obs may be hidden by another object's belief, by the robot,
-  ; by the drawer holding it being closed or by an open drawer above that one
+  ; by the drawer holding it being closed or by an open drawer above that one.  Every disjunct
+  ; binds ?o through (obs ?o ?obs): a disjunct without it is grounded over every object (22,540
+  ; atoms on one Swap replan, two thirds of Fast Downward's translation time)
   (:derived (boccluded ?o ?obs)
     (or (exists (?o2 ?pb2)
           (and (obs ?o ?obs) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
@@ -51,9 +53,9 @@
         (exists (?bq)
           (and (obs ?o ?obs) (atconf base ?bq) (not (bvisrobot ?o ?obs ?bq))))
         (exists (?d ?a)
-          (and (obson ?obs ?d) (atangle ?d ?a) (closed ?d ?a)))
+          (and (obs ?o ?obs) (obson ?obs ?d) (atangle ?d ?a) (closed ?d ?a)))
         (exists (?d ?d2 ?a)
-          (and (obson ?obs ?d2) (above ?d ?d2) (atangle ?d ?a) (open ?d ?a)))))
+          (and (obs ?o ?obs) (obson ?obs ?d2) (above ?d ?d2) (atangle ?d ?a) (open ?d ?a)))))
 
   ; the arm is tucked (hand empty) or in its carry configuration (holding)
   (:derived (armstowed)
