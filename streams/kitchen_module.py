@@ -121,7 +121,11 @@ class KitchenModule:
     def _each(
         self, make: Callable[[], Iterator], open_drawer: str | None = None, moving: str | None = None
     ) -> Iterator:
-        """Iterate a geometric generator, each draw inside the planning state."""
+        """Iterate a geometric generator, each draw inside the planning state.  When the
+        sampler has used up its attempts, this draw is ``None`` ("nothing this time", not
+        exhausted) and the next draw starts a fresh batch: a base the samples so far missed
+        may still exist, and the solver asks again at the next level instead of giving the
+        instance up for the whole solve (Swap seed 1 once ended "no relaxed solution" on it)."""
         it = None
         while True:
             with self.planning(open_drawer, moving):
@@ -130,7 +134,7 @@ class KitchenModule:
                 try:
                     out = next(it)
                 except StopIteration:
-                    return
+                    it, out = None, None
             yield out
 
     # -- values -----------------------------------------------------------------------------
@@ -212,6 +216,13 @@ class KitchenModule:
         w = self.world
         sr = w.surfaces[s]
         mount = np.asarray(mount_position(bq), float)
+        while True:  # batches of attempts; None after a batch without a placement (as _each)
+            found = yield from self._placements_here(o, s, g, bq, w, sr, mount)
+            if not found:
+                yield None
+
+    def _placements_here(self, o, s, g, bq, w, sr, mount):
+        found = False
         for _ in range(self.ks.max_attempts):
             with self.planning(s if s in DRAWERS else None):
                 frame = w.surface_frame(s)
@@ -227,7 +238,9 @@ class KitchenModule:
             pb = self.belief_of(p)
             path = self._kin(o, pb, g, bq)
             if path is not None:
+                found = True
                 yield (pb, ArmConf(path[0]), path)
+        return found
 
     def place_from(self, o: str, g: Grasp, bq, aq, s: str):
         """Where the held ``o`` lands on ``s`` when the hand goes down its approach from the arm

@@ -154,7 +154,7 @@ def test_a_drawer_below_an_open_one_is_planned_with_the_upper_one_closed():
     try:
         km = ep.agent.km
         km.drawers = {"top_drawer": DRAWER_TRAVEL, "bottom_drawer": DRAWER_TRAVEL}
-        bases = list(itertools.islice(km.sample_drawer_base("bottom_drawer"), 2))
+        bases = [b for b in itertools.islice(km.sample_drawer_base("bottom_drawer"), 4) if b]
         assert bases
         a1, a2 = ("bottom_drawer", DRAWER_TRAVEL), ("bottom_drawer", 0.0)
         assert any(km._plan_drawer("bottom_drawer", a1, a2, bq) is not None for (bq,) in bases)
@@ -203,7 +203,7 @@ def test_a_drawer_motion_starts_from_the_arm_configuration_planned_for_it():
         km = ep.agent.km
         km.drawers = {"top_drawer": DRAWER_TRAVEL, "bottom_drawer": 0.0}
         a1, a2 = ("top_drawer", DRAWER_TRAVEL), ("top_drawer", 0.0)
-        for (bq,) in itertools.islice(km.sample_drawer_base("top_drawer"), 3):
+        for (bq,) in filter(None, itertools.islice(km.sample_drawer_base("top_drawer"), 3)):
             here = km._plan_drawer("top_drawer", a1, a2, bq)
             if here is None:
                 continue
@@ -218,5 +218,26 @@ def test_a_drawer_motion_starts_from_the_arm_configuration_planned_for_it():
             break
         else:
             pytest.fail("no push planned from three drawer bases")
+    finally:
+        ep.close()
+
+
+def test_a_sampler_out_of_attempts_is_not_exhausted():
+    # A kitchen sampler that used up its attempts without a sample says "nothing this time"
+    # (None) and starts a fresh batch on the next draw: the solver may ask again at the next
+    # level instead of giving the instance up for the whole solve.
+    ep = make_episode("swap", 0)
+    try:
+        km = ep.agent.km
+        batches = iter([[], [("b1",), ("b2",)], []])
+        draws = km._each(lambda: iter(next(batches)))
+        assert [next(draws) for _ in range(5)] == [None, ("b1",), ("b2",), None, None]
+        # The solver's view: a None draw is a failure now, not the end of the generator.
+        from ssr_compile.stream import Generator
+
+        gen = Generator(lambda: km._each(lambda: iter(next(batches2))), (), "generator", "s")
+        batches2 = iter([[], [("b3",)]])
+        assert gen.next() is None and not gen.exhausted
+        assert gen.next() == ("b3",)
     finally:
         ep.close()
