@@ -36,7 +36,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .errors import TimeLimitReached
-from .focused import ReplanState, Solution, Step, solve, with_kept
+from .focused import ReplanState, Solution, Statistics, Step, solve, with_kept
 from .limits import overrunning_stream, time_limit
 from .stream import StreamsModule
 
@@ -372,7 +372,15 @@ def run_policy(
                         )
                 except TimeLimitReached as e:
                     name = overrunning_stream(e)
-                    raise StreamOverrun(name, time.monotonic() - began) from None
+                    if name is not None:
+                        raise StreamOverrun(name, time.monotonic() - began) from None
+                    # The solver's own work (compiling a large level, the translator) ran past
+                    # the limit: this attempt timed out, the episode goes on.
+                    stats = Statistics(total_time=time.monotonic() - began)
+                    sol = Solution(
+                        "timeout", None, None, [], stats,
+                        message=f"time limit of {limit:g} s reached",
+                    )  # fmt: skip
                 planning += sol.stats.total_time
                 spent[key] += sol.stats.total_time
                 streams_called += sum(s.calls for s in sol.stats.streams.values())

@@ -246,3 +246,27 @@ def test_constant_facts_leave_the_initial_state_to_the_next_problem():
     solution = SimpleNamespace(certificate=[held, made], evaluated=[], values=None)
     facts, _ = constant_facts(solution, problem, lambda n: True)
     assert facts == (made,)
+
+
+def test_the_solvers_own_overrun_times_the_attempt_out_not_the_episode(monkeypatch):
+    # A constrained attempt whose compile (no stream running) runs past its limit and the alarm's
+    # grace is a timed-out attempt: the policy falls back to unconstrained planning and the
+    # episode goes on (a kitchen Swap episode once ended here, "a stream did not return").
+    import ssr_compile.policy as policy_module
+
+    real_solve = policy_module.solve
+
+    def slow_when_constrained(*args, **kw):
+        state = kw.get("state")
+        if state is not None and state.tail:
+            while True:  # the solver's own work, not a stream's
+                pass
+        return real_solve(*args, **kw)
+
+    monkeypatch.setattr(policy_module, "solve", slow_when_constrained)
+    episode = progress.make_episode(None, 0)
+    result = run_policy(episode, PolicySettings(constrained_time=0.5, max_cycles=25))
+    assert result.success, result.reason
+    assert result.cycles[1].constrained == "timeout"
+    assert 0.5 <= result.cycles[1].constrained_time < 5.0
+    assert [a.split()[0] for a in result.actions] == ["(move-base", "(pick"]
