@@ -271,7 +271,11 @@ def state_problem(
             # again gains nothing a plan needs, and its observations, posteriors and
             # visibility tests would multiply the optimistic problem of every replan)
             s = belief.most_likely_surface()
-            init += [_atom("localized", o, pb), _atom("beliefon", o, pb, s)]
+            init += [
+                _atom("localized", o, pb),
+                _atom("anybase", o, pb),
+                _atom("beliefon", o, pb, s),
+            ]
             continue
         init += [
             _atom("possible", o, pb, s)

@@ -21,6 +21,7 @@
     ; static: certified by streams
     (conf ?r ?q) (traj ?r ?t) (poseb ?o ?pb) (grasp ?o ?g)
     (localized ?o ?pb)                ; ?pb is precise enough to grasp from
+    (anybase ?o ?pb)                  ; bases are sampled for ?pb (not only the reached one)
     (beliefon ?o ?pb ?s)              ; ?pb puts ?o on ?s (with high probability)
     (basefor ?o ?pb ?g ?bq)           ; from ?bq, the arm may reach ?o at ?pb with ?g
     (kin ?o ?pb ?g ?bq ?aq ?t)        ; at ?bq, ?t approaches ?o at ?pb with ?g from arm conf ?aq

@@ -13,11 +13,14 @@
     :inputs (?o ?s)
     :domain (placeable ?o ?s)
     :outputs (?pb)
-    :certified (and (poseb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s)))
-  ; base configurations from which ?o at ?pb can be grasped with ?g
+    :certified (and (poseb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s) (anybase ?o ?pb)))
+  ; base configurations from which ?o at ?pb can be grasped with ?g (not for placements
+  ; sampled from the reached base: those are reached from there, and a base sampled for each
+  ; of them, times each grasp, squared by the base motions between them, made constrained
+  ; replans of Swap 18 times larger than unconstrained ones at the same level)
   (:stream inv-reach
     :inputs (?o ?pb ?g)
-    :domain (and (localized ?o ?pb) (grasp ?o ?g))
+    :domain (and (localized ?o ?pb) (anybase ?o ?pb) (grasp ?o ?g))
     :outputs (?bq)
     :certified (and (conf base ?bq) (basefor ?o ?pb ?g ?bq)))
   ; the pre-grasp arm configuration and the approach path (function)
@@ -152,7 +155,7 @@
     :domain (and (poseb ?o ?pb1) (obs ?o ?obs) (obsof ?pb1 ?obs) (obson ?obs ?s))
     :outputs (?pb2)
     :certified (and (poseb ?o ?pb2) (beliefupdate ?o ?pb1 ?obs ?pb2) (localized ?o ?pb2)
-                    (beliefon ?o ?pb2 ?s)))
+                    (beliefon ?o ?pb2 ?s) (anybase ?o ?pb2)))
   ; paper §IV-A: ?o2 at ?pb2 leaves the region of ?obs visible with probability >= 1 - eps
   (:stream test-vis
     :inputs (?o ?obs ?o2 ?pb2)
