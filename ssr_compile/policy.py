@@ -191,6 +191,7 @@ class Cycle:
     unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
     comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
     plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
+    observation: str | None = None  # what the environment answered (``str`` of its observation)
 
     def as_dict(self) -> dict:
         d = dict(vars(self))
@@ -402,7 +403,7 @@ def run_policy(
                 )
                 for key, value in timings.items():
                     setattr(record, key, value)
-                if timings:
+                if "execution_time" in timings:
                     total = time.monotonic() - cycle_start - (timings["comparison_time"] or 0.0)
                     record.overhead_time = max(
                         total - record.planning_time - record.execution_time - record.update_time,
@@ -493,6 +494,7 @@ def run_policy(
                 execution_time=after_exec - before_exec,
                 update_time=after_update - after_exec,
                 comparison_time=comparison,
+                observation=None if observation is None else str(observation),
             )
     except StreamOverrun as e:
         planning += e.seconds

@@ -241,3 +241,38 @@ def test_a_sampler_out_of_attempts_is_not_exhausted():
         assert gen.next() == ("b3",)
     finally:
         ep.close()
+
+
+def test_a_missed_pick_spreads_the_belief_so_the_robot_looks_again():
+    # A pick that missed in the true world is evidence that the estimate is off by more than the
+    # grasp's tolerance: the belief spreads (no longer localized) and the next plan detects the
+    # object again, instead of repeating the same pick (Cook seed 0 once did, 20 times).
+    from ssr_compile.belief.particles import PoseBelief
+    from ssr_compile.sim.problem import is_localized
+
+    from ssr_compile.focused import Step
+
+    ep = make_episode("cook", 0)
+    try:
+        agent = ep.agent
+        closed = {"top_drawer": 0.0, "bottom_drawer": 0.0}
+        _look(agent, closed)
+        k = agent.known
+        counter = k.beliefs["block"].surface("counter")
+        rng = np.random.default_rng(0)
+        poses = np.column_stack(
+            [rng.normal(0.0, 0.004, (100, 2)) + counter.sample_xy(rng, 1), np.zeros((100, 2))]
+        )
+        k.beliefs["block"] = PoseBelief.from_particles("block", (counter,), [0] * 100, poses)
+        assert is_localized(k.beliefs["block"], "counter")
+        step = Step("pick", ("block", "pb-block", "g-1", "bq0", "aq0", "t-1"),
+                    ("block", k.beliefs["block"], None, None, None, None))  # fmt: skip
+        missed = KitchenObservation(False, "pick: block is 0.031 m from the grasp, missed",
+                                    k.base, k.arm, closed, None, False, {})  # fmt: skip
+        agent.update(step, missed)
+        after = agent.known.beliefs["block"]
+        assert not is_localized(after, "counter")
+        assert after.prob_surface("counter") == pytest.approx(1.0)
+        assert 0.02 < float(after.std("counter")[:2].max()) < 0.05
+    finally:
+        ep.close()
