@@ -307,7 +307,9 @@ def run_episode_here(spec: EpisodeSpec) -> dict:
     episode = factory(spec.task.problem, spec.seed)
     build = time.monotonic() - t0
     try:
-        result = run_policy(episode, settings)
+        # One line per cycle in the episode's log (DIR/logs/), to read why an episode failed.
+        result = run_policy(episode, settings, on_cycle=lambda c: print(c.line(), flush=True))
+        print(f"outcome: {result.reason}; success {result.success}", flush=True)
     finally:
         episode.close()
     out = result.as_dict()

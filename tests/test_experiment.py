@@ -78,6 +78,11 @@ def test_sweep_runs_resumes_and_reports(tmp_path, capsys):
         assert r["cycles"] >= 2 and r["planner_calls"] >= 1 and r["planning_time"] > 0
         assert r["wall_time"] >= r["episode_time"] and r["cpu_time"] > 0
         assert r["version"] == X.provenance()["version"]
+        # the episode's log: one line per cycle, then the outcome
+        log = Path(r["log"]).read_text().splitlines()
+        cycles = [x for x in log if x.startswith("cycle ")]
+        assert len(cycles) == r["cycles"] and cycles[0].startswith("cycle   1  (move-base")
+        assert log[-1] == "outcome: goal belief reached; success True"
     assert (out / "table.md").is_file() and (out / "table1.png").stat().st_size > 1000
     before = (out / "episodes.jsonl").read_text()
     capsys.readouterr()
