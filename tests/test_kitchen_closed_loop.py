@@ -247,9 +247,9 @@ def test_a_missed_pick_spreads_the_belief_so_the_robot_looks_again():
     # A pick that missed in the true world is evidence that the estimate is off by more than the
     # grasp's tolerance: the belief spreads (no longer localized) and the next plan detects the
     # object again, instead of repeating the same pick (Cook seed 0 once did, 20 times).
-    from ssr_compile.belief.particles import PoseBelief
     from ssr_compile.sim.problem import is_localized
 
+    from ssr_compile.belief.particles import PoseBelief
     from ssr_compile.focused import Step
 
     ep = make_episode("cook", 0)
