@@ -62,9 +62,12 @@ from .preimage import PlanInvalid, plan_preimage, stream_plan
 # relative to the first one), no-plan rounds at one level before it rises.
 SAMPLES_PER_PLAN = 40
 STALLS_PER_LEVEL = 2
-# Planner calls after the first incumbent before it is returned anyway (by default only when
-# the planner finds no cheaper plan, as the Focused loop returns the first all-real plan).
-IMPROVEMENTS = math.inf
+# After a "no plan", draws per result of the queued stream plans the queue may make.
+RETRIES = 20
+# Planner calls after the first incumbent before it is returned, with a planner that is not
+# cost-optimal (an optimal one stops when it finds no cheaper plan).  0: at once, as asking a
+# suboptimal planner for a cheaper plan than a given one can take as long as optimal search.
+IMPROVEMENTS = 0
 EPS = 1e-9
 
 
@@ -126,6 +129,10 @@ class AdaptiveLoop(_FocusedLoop):
         # cost, steps, certificate, deferred results
         self.incumbent: tuple[float, list, list, list] | None = None
         self.after_incumbent = 0
+        # A cost-optimal planner is asked for a plan cheaper than the incumbent (its "none"
+        # proves the incumbent best at this level); another one plans as usual, and the
+        # incumbent stands when its plan is no cheaper (proving it would be optimal search).
+        self.optimal = bool(getattr(self.backend.capabilities, "optimal", False))
         self.replan_now = False
         self.done: Solution | None = None
         self.sampled = 0  # stream calls made by the queue
@@ -177,7 +184,11 @@ class AdaptiveLoop(_FocusedLoop):
                 done = self.new_plan(compiled, result)
                 if done is not None:
                     return done
-                if self.incumbent is not None and self.after_incumbent >= IMPROVEMENTS:
+                if (
+                    self.incumbent is not None
+                    and not self.optimal
+                    and self.after_incumbent >= IMPROVEMENTS
+                ):
                     return self.finish_incumbent()
                 self.sample(self.credit)
             else:
@@ -188,12 +199,17 @@ class AdaptiveLoop(_FocusedLoop):
                     return self.finish_incumbent()
                 new = 0
                 if stalls < STALLS_PER_LEVEL and (self.queue or self.hidden):
+                    # Before a larger problem (whose "no plan" may take the planner long to
+                    # prove), the queue gets a larger share: as many calls as all planner
+                    # calls so far bought.
+                    if self.queue:
+                        pending = sum(len(s.results) for s in self.skeletons if s.live)
+                        self.sample(
+                            self.samples_per_plan * self.stats.planner_calls
+                            + RETRIES * pending
+                        )
                     self.round += 1
                     new = self.publish()
-                    if not new and self.queue:
-                        before = len(self.ev.results)
-                        self.sample(max(self.credit, 1.0), until_new=True)
-                        new = len(self.ev.results) - before
                 if self.done is not None:
                     return self.done
                 if new or self.replan_now:
@@ -240,7 +256,7 @@ class AdaptiveLoop(_FocusedLoop):
         """The backend's answer under the cost bound: ``max_cost``, or the incumbent's cost."""
         remaining = self.deadline - time.monotonic()
         limit = self.max_cost
-        if self.incumbent is not None:
+        if self.incumbent is not None and self.optimal:
             limit = min(limit, self.incumbent[0])
         bound = None if math.isinf(limit) else limit * compiled.scale
         result = self.backend.solve(
@@ -275,6 +291,9 @@ class AdaptiveLoop(_FocusedLoop):
         needed = stream_plan(inst, pre, plan) if inst else []
         cost = (result.cost or 0.0) / compiled.scale
         certificate = sorted(pre.static_facts, key=str)
+        if self.incumbent is not None and cost >= self.incumbent[0] - EPS:
+            self.say(f"  the planner's plan costs {cost:g}: the incumbent is the solution")
+            return self.finish_incumbent()
         if not needed:
             return self.better_of(SOLVED, _steps(plan, self.values, set()), cost, certificate)
         now, later = _split_deferred(needed, pre, plan, inst, self.module, self.defer)
@@ -331,11 +350,10 @@ class AdaptiveLoop(_FocusedLoop):
         b.skeleton.live -= 1
         return b
 
-    def sample(self, credit: float, until_new: bool = False) -> None:
+    def sample(self, credit: float) -> None:
         """Visit bindings: first every untried deepest one (free), then while the credit of
-        stream calls lasts (``until_new``: until a new value appears).  Stops when a binding
+        stream calls lasts.  Stops when a binding
         completes a skeleton (the planner is asked again) or the solve ends."""
-        before = len(self.ev.results)
         spent = 0
         visits = 0
         # A visit that calls no stream is cheap but not free: bound them too.
@@ -350,8 +368,6 @@ class AdaptiveLoop(_FocusedLoop):
                 continue
             free = not first and not tried
             if not free:
-                if until_new and len(self.ev.results) > before:
-                    break
                 if spent >= credit or visits >= max_visits:
                     break
             b = self.pop()
@@ -478,6 +494,9 @@ class AdaptiveLoop(_FocusedLoop):
         cheaper = [s for s in self.skeletons if s.live and s.cost < cost - EPS]
         if self.accept_drawn and cost <= sk.cost + 1e-6 and not cheaper:
             self.say("  the plan holds with the values drawn")
+            self.done = self.finish_incumbent()
+        elif not self.optimal and IMPROVEMENTS <= 0:
+            self.say("  the planner is not cost-optimal: the incumbent is the solution")
             self.done = self.finish_incumbent()
 
 
