@@ -65,9 +65,12 @@ STALLS_PER_LEVEL = 2
 # After a "no plan", draws per result of the queued stream plans the queue may make.
 RETRIES = 20
 # Planner calls after the first incumbent before it is returned, with a planner that is not
-# cost-optimal (an optimal one stops when it finds no cheaper plan).  0: at once, as asking a
-# suboptimal planner for a cheaper plan than a given one can take as long as optimal search.
-IMPROVEMENTS = 0
+# cost-optimal (an optimal one stops when it finds no cheaper plan); each may take at most
+# CONFIRM_SHARE times the time spent so far (at least a second): with one, the planner sees
+# the real facts once more, as the Focused loop's last call does, without waiting for a proof
+# that may take as long as optimal search.
+IMPROVEMENTS = 1
+CONFIRM_SHARE = 2.0
 EPS = 1e-9
 
 
@@ -184,13 +187,15 @@ class AdaptiveLoop(_FocusedLoop):
                 done = self.new_plan(compiled, result)
                 if done is not None:
                     return done
+                self.sample(self.credit)
                 if (
-                    self.incumbent is not None
+                    self.done is None
+                    and self.incumbent is not None
                     and not self.optimal
                     and self.after_incumbent >= IMPROVEMENTS
                 ):
+                    self.say("  the planner is not cost-optimal: the incumbent is the solution")
                     return self.finish_incumbent()
-                self.sample(self.credit)
             else:
                 if result.message:
                     self.best_failure = result.message
@@ -255,6 +260,9 @@ class AdaptiveLoop(_FocusedLoop):
     def plan_bounded(self, compiled):
         """The backend's answer under the cost bound: ``max_cost``, or the incumbent's cost."""
         remaining = self.deadline - time.monotonic()
+        if self.incumbent is not None and not self.optimal:
+            spent = time.monotonic() - self.start
+            remaining = min(remaining, max(1.0, CONFIRM_SHARE * spent))
         limit = self.max_cost
         if self.incumbent is not None and self.optimal:
             limit = min(limit, self.incumbent[0])
@@ -495,9 +503,7 @@ class AdaptiveLoop(_FocusedLoop):
         if self.accept_drawn and cost <= sk.cost + 1e-6 and not cheaper:
             self.say("  the plan holds with the values drawn")
             self.done = self.finish_incumbent()
-        elif not self.optimal and IMPROVEMENTS <= 0:
-            self.say("  the planner is not cost-optimal: the incumbent is the solution")
-            self.done = self.finish_incumbent()
+
 
 
 def _renamed(x, mapping: dict[str, str]):
