@@ -139,9 +139,9 @@ class AdaptiveLoop(_FocusedLoop):
         self.replan_now = False
         self.done: Solution | None = None
         self.sampled = 0  # stream calls made by the queue
-        # Values of later calls wait before the planner sees them (as a level caps how deep
-        # optimistic instantiation goes): the result of an instance's k-th call is hidden until
-        # ``self.round >= k``; so are results over hidden values.  ``round`` rises with every
+        # Later values wait before the planner sees them (as a level caps how deep optimistic
+        # instantiation goes): an instance's value k (from 0, counting values, not failed
+        # calls) is hidden until ``self.round >= k``; so are results over hidden values.  ``round`` rises with every
         # no-plan answer.
         self.round = 0
         self.hidden: list[tuple[int, Result]] = []
@@ -187,13 +187,14 @@ class AdaptiveLoop(_FocusedLoop):
                 done = self.new_plan(compiled, result)
                 if done is not None:
                     return done
-                self.sample(self.credit)
-                if (
-                    self.done is None
-                    and self.incumbent is not None
+                last = (
+                    self.incumbent is not None
                     and not self.optimal
                     and self.after_incumbent >= IMPROVEMENTS
-                ):
+                )
+                # the last chance of a cheaper plan gets the larger share
+                self.sample(self.large_share() if last else self.credit)
+                if self.done is None and last and not self.replan_now:
                     self.say("  the planner is not cost-optimal: the incumbent is the solution")
                     return self.finish_incumbent()
             else:
@@ -208,11 +209,7 @@ class AdaptiveLoop(_FocusedLoop):
                     # prove), the queue gets a larger share: as many calls as all planner
                     # calls so far bought.
                     if self.queue:
-                        pending = sum(len(s.results) for s in self.skeletons if s.live)
-                        self.sample(
-                            self.samples_per_plan * self.stats.planner_calls
-                            + RETRIES * pending
-                        )
+                        self.sample(self.large_share())
                     self.round += 1
                     new = self.publish()
                 if self.done is not None:
@@ -256,6 +253,13 @@ class AdaptiveLoop(_FocusedLoop):
                 keep.append((k, r))
         self.hidden = keep
         return shown
+
+    def large_share(self) -> float:
+        """Stream calls for the queue before a decision that costs more than a planner call
+        (a larger problem, or returning the incumbent): as many as all planner calls so far
+        bought, and ``RETRIES`` per result of the live stream plans."""
+        pending = sum(len(s.results) for s in self.skeletons if s.live)
+        return self.samples_per_plan * self.stats.planner_calls + RETRIES * pending
 
     def plan_bounded(self, compiled):
         """The backend's answer under the cost bound: ``max_cost``, or the incumbent's cost."""
@@ -429,7 +433,7 @@ class AdaptiveLoop(_FocusedLoop):
         ok = self.ev.evaluate(res, binding)
         if len(self.ev.results) > made:
             r = self.ev.results.pop()
-            k = len(h.outcomes)  # this call's index
+            k = sum(1 for o in h.outcomes if o is not None)  # values drawn before this one
             if k > self.round or any(x in self.hidden_names for x in r.instance.inputs):
                 self.hidden.append((k, r))
                 self.hidden_names.update(r.outputs)
