@@ -12,6 +12,7 @@ Run: python bench/scaling_bench.py               # sizes 1..8, one run each (abo
      python bench/scaling_bench.py --full        # 3 runs per size (medians), longer limits
      python bench/scaling_bench.py --sizes 1 2 3 --runs 3 --planner fd:opt
      python bench/scaling_bench.py --redraws 4 --accept-drawn   # see the solver's keywords
+     python bench/scaling_bench.py --algorithm focused adaptive # both, interleaved, a row each
 """
 
 from __future__ import annotations
@@ -68,7 +69,7 @@ def generate(n: int, blockers: bool = False):
     return text, values
 
 
-def run_once(n: int, args) -> tuple:
+def run_once(n: int, args, algorithm: str = "focused") -> tuple:
     text, values = generate(n, args.blockers)
     d = parse_domain((FOLDER / "domain.pddl").read_text())
     s = parse_stream_file((FOLDER / "stream.pddl").read_text())
@@ -88,6 +89,7 @@ def run_once(n: int, args) -> tuple:
         max_level=args.max_level,
         redraws=args.redraws,
         accept_drawn=args.accept_drawn or None,
+        algorithm=algorithm,
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())
@@ -121,12 +123,19 @@ def main() -> None:
         help="a plan whose stream plan all succeeds is the solution, also with a suboptimal "
         "planner (the solver's accept_drawn keyword)",
     )
+    ap.add_argument(
+        "--algorithm",
+        nargs="+",
+        default=["focused"],
+        metavar="NAME",
+        help="the solver's algorithm(s): focused, adaptive; several: interleaved runs, a row each",
+    )
     args = ap.parse_args()
     args.sizes = args.sizes or list(range(1, 9))
     args.runs = args.runs or (3 if args.full else 1)
     args.time_limit = args.time_limit or (120.0 if args.full else 15.0)
     head = (
-        f"{'blocks':>6s} {'status':8s} {'time s':>8s} {'streams':>8s} {'planner':>8s} "
+        f"{'blocks':>6s} {'algorithm':9s} {'status':8s} {'time s':>8s} {'streams':>8s} {'planner':>8s} "
         f"{'length':>6s} {'cost':>8s} {'objects':>8s} {'facts':>7s}"
     )
     print(
@@ -138,15 +147,22 @@ def main() -> None:
     print(head)
     print("-" * len(head))
     for n in args.sizes:
-        rows = [run_once(n, args) for _ in range(args.runs)]
-        med = [statistics.median(r[i] for r in rows) for i in range(1, 8)]
-        status = "/".join(sorted({r[0] for r in rows}))
-        print(
-            f"{n:6d} {status:8s} {med[0]:8.2f} {med[1]:8.0f} {med[2]:8.0f} {med[3]:6.0f} "
-            f"{med[4]:8.2f} {med[5]:8.0f} {med[6]:7.0f}",
-            flush=True,
-        )
+        runs: dict[str, list] = {a: [] for a in args.algorithm}
+        for _ in range(args.runs):
+            for algorithm in args.algorithm:
+                runs[algorithm].append(run_once(n, args, algorithm))
+        for algorithm, rows in runs.items():
+            print_row(n, algorithm, rows)
 
+
+def print_row(n: int, algorithm: str, rows: list) -> None:
+    med = [statistics.median(r[i] for r in rows) for i in range(1, 8)]
+    status = "/".join(sorted({r[0] for r in rows}))
+    print(
+        f"{n:6d} {algorithm:9s} {status:8s} {med[0]:8.2f} {med[1]:8.0f} {med[2]:8.0f} "
+        f"{med[3]:6.0f} {med[4]:8.2f} {med[5]:8.0f} {med[6]:7.0f}",
+        flush=True,
+    )
 
 if __name__ == "__main__":
     main()

@@ -8,8 +8,10 @@ the optimistic problem), when the solver reports it.
 Also pddlstream's continuous_tamp (its domain and stream files, read in place from the shared
 corpus when present, with the streams of ``tests/fixtures/ctamp``).  ``--option KEY=VALUE``
 passes a keyword to the solver (``share=1``, ``eager_tests=0``, ``eager_cost=-1``...).
+``--algorithm focused adaptive`` runs each cell with each algorithm, interleaved run by run
+(one row per algorithm, the same runs' conditions: before/after in one table).
 
-Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE]
+Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE] [--algorithm NAME...]
 """
 
 from __future__ import annotations
@@ -122,6 +124,13 @@ def main() -> None:
     )
     ap.add_argument("--no-defer", action="store_true", help="only the runs without deferral")
     ap.add_argument(
+        "--algorithm",
+        nargs="+",
+        default=["focused"],
+        metavar="NAME",
+        help="the solver's algorithm(s): focused, adaptive; several: interleaved runs, a row each",
+    )
+    ap.add_argument(
         "--option",
         action="append",
         default=[],
@@ -136,7 +145,7 @@ def main() -> None:
     options = {k: bool(v) if k in ("share", "eager_tests") else v for k, v in options.items()}
     args.runs = args.runs or (5 if args.full else 1)
     head = (
-        f"{'example':16s} {'problem':22s} {'defer':5s} {'status':8s} {'median s':>9s} "
+        f"{'example':16s} {'problem':22s} {'defer':5s} {'algorithm':9s} {'status':8s} {'median s':>9s} "
         f"{'planner':>7s} {'streams':>7s} {'cost':>8s} {'size obj/facts':>14s}"
     )
     print(head)
@@ -149,32 +158,44 @@ def main() -> None:
             if not selected(name, problem, args.only):
                 continue
             for defer in (False,) if args.no_defer else (False, True):
-                rows = []
+                rows: dict[str, list] = {a: [] for a in args.algorithm}
                 try:
-                    rows = [
-                        run_once(folder, config, problem, defer, args.time_limit, options)
-                        for _ in range(args.runs)
-                    ]
+                    for _ in range(args.runs):
+                        for algorithm in args.algorithm:
+                            rows[algorithm].append(
+                                run_once(
+                                    folder,
+                                    config,
+                                    problem,
+                                    defer,
+                                    args.time_limit,
+                                    {**options, "algorithm": algorithm},
+                                )
+                            )
                 except Exception as e:  # noqa: BLE001 - a broken example is a row, not a crash
                     print(f"{name:16s} {problem:22s} {str(defer):5s} error: {e}")
                     continue
-                statuses = {r[0] for r in rows}
-                sizes = [r[5] for r in rows if r[5] is not None]
-                size = (
-                    f"{statistics.median(z[0] for z in sizes):.0f}/"
-                    f"{statistics.median(z[1] for z in sizes):.0f}"
-                    if sizes
-                    else "-"
-                )
-                print(
-                    f"{name:16s} {problem:22s} {str(defer):5s} {'/'.join(sorted(statuses)):8s} "
-                    f"{statistics.median(r[1] for r in rows):9.3f} "
-                    f"{statistics.median(r[2] for r in rows):7.0f} "
-                    f"{statistics.median(r[3] for r in rows):7.0f} "
-                    f"{statistics.median(r[4] for r in rows):8.2f} {size:>14s}",
-                    flush=True,
-                )
+                for algorithm, runs in rows.items():
+                    print_row(name, problem, defer, algorithm, runs)
 
+
+def print_row(name, problem, defer, algorithm, rows) -> None:
+    statuses = {r[0] for r in rows}
+    sizes = [r[5] for r in rows if r[5] is not None]
+    size = (
+        f"{statistics.median(z[0] for z in sizes):.0f}/"
+        f"{statistics.median(z[1] for z in sizes):.0f}"
+        if sizes
+        else "-"
+    )
+    print(
+        f"{name:16s} {problem:22s} {str(defer):5s} {algorithm:9s} {'/'.join(sorted(statuses)):8s} "
+        f"{statistics.median(r[1] for r in rows):9.3f} "
+        f"{statistics.median(r[2] for r in rows):7.0f} "
+        f"{statistics.median(r[3] for r in rows):7.0f} "
+        f"{statistics.median(r[4] for r in rows):8.2f} {size:>14s}",
+        flush=True,
+    )
 
 if __name__ == "__main__":
     main()

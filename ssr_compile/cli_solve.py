@@ -22,7 +22,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 _DEFAULTS_NOTE = (
     "With an example FOLDER, the settings in its example.toml (planner, time_limit, level, "
-    "max_level, max_cost, defer) apply first, in place of the defaults below; an option given "
+    "max_level, max_cost, defer, algorithm) apply first, in place of the defaults below; an option given "
     "on the command line always wins.  -v prints the settings in force and where each came "
     "from (flag, example.toml, default)."
 )
@@ -89,6 +89,14 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "off, or example.toml's); --no-defer turns it off",
     )
     p.add_argument(
+        "--algorithm",
+        type=_check_algorithm,
+        metavar="NAME",
+        help="focused (default: evaluate each plan's streams once, then plan again) or adaptive "
+        "(keep a queue of plan skeletons and sample their streams between planner calls; "
+        "deterministic per seed); or example.toml's",
+    )
+    p.add_argument(
         "--seed",
         type=cli.seed,
         metavar="N",
@@ -122,6 +130,7 @@ DEFAULTS = {
     "max_level": 8,
     "max_cost": math.inf,
     "defer": False,
+    "algorithm": "focused",
     "seed": 0,
 }
 _FLAGS = {
@@ -131,6 +140,7 @@ _FLAGS = {
     "max_level": "--max-level",
     "max_cost": "--max-cost",
     "defer": "--defer/--no-defer",
+    "algorithm": "--algorithm",
     "seed": "--seed",
 }
 
@@ -141,6 +151,16 @@ def _check_bool(text: str) -> bool:
     if text in ("False", "false"):
         return False
     raise argparse.ArgumentTypeError(f"expected true or false, got '{text}'")
+
+
+def _check_algorithm(text: str) -> str:
+    from .focused import ALGORITHMS
+
+    if text not in ALGORITHMS:
+        raise argparse.ArgumentTypeError(
+            f"expected one of {', '.join(ALGORITHMS)}, got '{text}'"
+        )
+    return text
 
 
 def _check_name(text: str) -> str:
@@ -156,6 +176,7 @@ _CHECKS = {
     "max_level": cli.level,
     "max_cost": cli.cost_bound,
     "defer": _check_bool,
+    "algorithm": _check_algorithm,
     "seed": cli.seed,
 }
 
@@ -286,9 +307,11 @@ def run(args: argparse.Namespace) -> int:
     if args.verbose:
         print("settings in force:", file=sys.stderr)
         print(describe_settings(settings), file=sys.stderr)
-    planner, time_limit, level, max_level, max_cost, defer, seed = (
+    planner, time_limit, level, max_level, max_cost, defer, seed, algorithm = (
         settings[n][0]
-        for n in ("planner", "time_limit", "level", "max_level", "max_cost", "defer", "seed")
+        for n in (
+            "planner", "time_limit", "level", "max_level", "max_cost", "defer", "seed", "algorithm"
+        )
     )
     results = []
     status = 0
@@ -324,6 +347,7 @@ def run(args: argparse.Namespace) -> int:
                     initial_level=level,
                     max_level=max_level,
                     progress=progress,
+                    algorithm=algorithm,
                 )
         except TimeLimitReached as e:
             status = 1

@@ -347,6 +347,7 @@ def solve(
     accept_drawn: bool | None = None,
     share: bool = False,
     state: ReplanState | None = None,
+    algorithm: str = "focused",
 ) -> Solution:
     """Solve a PDDLStream problem with the Focused algorithm (see the module docstring).
 
@@ -373,11 +374,13 @@ def solve(
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
     object); off by default, as it is not faster on the shipped examples yet.
+    ``algorithm``: "focused" (this module's loop) or "adaptive" (a queue of plan skeletons
+    sampled incrementally between planner calls: :mod:`ssr_compile.adaptive`).
     Returns a :class:`Solution` with status "solved", "unsolvable" or "timeout".
     """
     state = _inherited(state, plan_tail, is_constant, evaluated, values)
     problem, module = with_kept(problem, module, state)
-    loop = _FocusedLoop(
+    loop = _loop_class(algorithm)(
         domain,
         streams,
         problem,
@@ -398,6 +401,20 @@ def solve(
         share=share,
     )
     return loop.run()
+
+
+ALGORITHMS = ("focused", "adaptive")
+
+
+def _loop_class(algorithm: str):
+    """The loop that runs one call of :func:`solve` for ``algorithm``."""
+    if algorithm == "focused":
+        return _FocusedLoop
+    if algorithm == "adaptive":
+        from .adaptive import AdaptiveLoop
+
+        return AdaptiveLoop
+    raise ValueError(f"unknown algorithm {algorithm!r}: expected one of {', '.join(ALGORITHMS)}")
 
 
 def _inherited(state, plan_tail, is_constant, evaluated, values) -> ReplanState:
