@@ -160,16 +160,9 @@ class AdaptiveLoop(_FocusedLoop):
             try:
                 compiled = self.compile()
             except InstanceCapReached as e:
-                if self.level <= self.first_level:
-                    raise
-                if self.incumbent is not None:
+                if self.incumbent is not None and self.level > self.first_level:
                     return self.finish_incumbent()
-                took = time.monotonic() - self.start
-                return self.finish(
-                    "unsolvable",
-                    message=f"no plan found up to level {self.level - 1} in {took:.1f} s; "
-                    f"level {self.level} would pass the cap ({e.message})",
-                )
+                return self.capped(e)
             result = self.plan_bounded(compiled)
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)

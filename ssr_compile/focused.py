@@ -512,15 +512,7 @@ class _FocusedLoop:
             try:
                 compiled = self.compile()
             except InstanceCapReached as e:
-                if self.level <= self.first_level:
-                    raise
-                # A resource limit, like the last level: no plan up to the level before.
-                took = time.monotonic() - self.start
-                return self.finish(
-                    "unsolvable",
-                    message=f"no plan found up to level {self.level - 1} in {took:.1f} s; "
-                    f"level {self.level} would pass the cap ({e.message})",
-                )
+                return self.capped(e)
             result, bound = self.plan(compiled)
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)
@@ -534,6 +526,18 @@ class _FocusedLoop:
                 done = self.use_plan(compiled, result)
             if done is not None:
                 return done
+
+    def capped(self, e: InstanceCapReached) -> Solution:
+        """The level would pass the instance cap: a resource limit, like the last level (no
+        plan up to the level before); at the first level it stays an error."""
+        if self.level <= self.first_level:
+            raise e
+        took = time.monotonic() - self.start
+        return self.finish(
+            "unsolvable",
+            message=f"no plan found up to level {self.level - 1} in {took:.1f} s; "
+            f"level {self.level} would pass the cap ({e.message})",
+        )
 
     def finish(self, status, plan=None, cost=None, certificate=(), deferred=(), message=""):
         self.stats.total_time = time.monotonic() - self.start
