@@ -24,7 +24,7 @@ from contextlib import contextmanager
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
-from ssr_compile.sim.problem import ABOVE, canonical_surface, is_localized
+from ssr_compile.sim.problem import canonical_surface, is_localized
 from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
 from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
@@ -104,17 +104,18 @@ class KitchenModule:
     def planning(self, open_drawer: str | None = None, moving: str | None = None):
         """The planning state: movable objects out, drawers at the openings the robot saw
         (``open_drawer`` open: something in it is reached); ``moving``: a drawer about to be
-        pulled or pushed.  The drawers above either are closed, as the domain guarantees then
+        pulled or pushed.  The other drawers are closed then, as the domain guarantees
         (``covered``, in ``accessible`` and in pull/push)."""
         w = self.world
-        above = {d1 for d1, d2 in ABOVE if d2 in (moving, open_drawer)}
+        used = {moving, open_drawer} - {None}
+        others = {d for d in self.drawers if d not in used} if used else set()
         with w.saved():
             w.held = None
             for o in list(w.objects):
                 if w.support.get(o) is not None:
                     w.remove_object(o)
             for d, q in self.drawers.items():
-                w.set_drawer(d, DRAWER_TRAVEL if d == open_drawer else 0.0 if d in above else q)
+                w.set_drawer(d, DRAWER_TRAVEL if d == open_drawer else 0.0 if d in others else q)
             w.set_arm(ARM_TUCK)
             yield w
 

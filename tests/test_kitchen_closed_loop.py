@@ -163,6 +163,28 @@ def test_a_drawer_below_an_open_one_is_planned_with_the_upper_one_closed():
         ep.close()
 
 
+def test_reaching_into_a_drawer_is_planned_with_the_other_drawers_closed():
+    # The domain's `covered`: the arm reaches into a drawer, or moves it, only with every other
+    # drawer closed, and the streams plan in that state.  With the bottom drawer open below the
+    # top one, Swap seed 2 found no base for the block in the top drawer, and no plan closed the
+    # bottom drawer first: "no relaxed solution".
+    ep = make_episode("swap", 2)
+    try:
+        km = ep.agent.km
+        km.drawers = {"top_drawer": DRAWER_TRAVEL, "bottom_drawer": DRAWER_TRAVEL}
+        for use in ({"open_drawer": "top_drawer"}, {"moving": "top_drawer"}):
+            with km.planning(**use) as w:
+                assert w.drawer_q["bottom_drawer"] == 0.0, use
+        with km.planning(open_drawer="bottom_drawer") as w:
+            assert w.drawer_q["top_drawer"] == 0.0
+            assert w.drawer_q["bottom_drawer"] == DRAWER_TRAVEL
+        with km.planning() as w:  # nothing reached into: the drawers as the robot saw them
+            assert w.drawer_q["top_drawer"] == w.drawer_q["bottom_drawer"] == DRAWER_TRAVEL
+        assert km.drawers["bottom_drawer"] == DRAWER_TRAVEL  # the robot's knowledge is untouched
+    finally:
+        ep.close()
+
+
 def test_arm_motions_avoid_the_objects_the_robot_has_localized():
     # Stow: after placing the sugar box, the planned way back to tuck swept through it (arm
     # motions were planned in a world without movable objects); the true world refused it and

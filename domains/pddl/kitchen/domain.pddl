@@ -71,10 +71,13 @@
         (exists (?d ?a) (and (beliefon ?o ?pb ?d) (atangle ?d ?a) (open ?d ?a)
                              (not (covered ?d))))))
 
-  ; an open drawer above ?d overhangs it: the arm reaches into ?d, or moves its handle, only
-  ; with the drawers above closed (the streams plan those motions in that state)
+  ; another drawer is open: the arm reaches into ?d, or moves its handle, only with the other
+  ; drawers closed, as the streams plan those motions (an open drawer above overhangs ?d; an
+  ; open one below keeps the base from the front of ?d: with the bottom drawer open, Swap seed
+  ; 2 found no base for the block in the top one, and no plan closed the bottom one first)
   (:derived (covered ?d)
-    (exists (?d2 ?a) (and (above ?d2 ?d) (atangle ?d2 ?a) (open ?d2 ?a))))
+    (exists (?d2 ?a) (and (drawer ?d) (drawer ?d2) (not (= ?d2 ?d)) (atangle ?d2 ?a)
+                          (open ?d2 ?a))))
 
   ; a tall object in a drawer keeps it from closing
   (:derived (blocked ?d)
