@@ -87,13 +87,34 @@ def belief_surface(world: World, surface: str) -> Surface:
 
 
 def _place_random(world: World, rng: np.random.Generator, obj: str, surface: str) -> None:
+    """``obj`` at a random stable, collision-free pose on ``surface``; in a drawer, only where
+    the robot can grasp it with the drawer open (and the others closed): the back of a drawer
+    stays under the counter when it is open, and a block there made Swap seed 2 unsolvable
+    (no base, no grasp: "no relaxed solution" after the drawer was opened)."""
     from .samplers import KitchenStreams
 
     ks = KitchenStreams(world, rng, max_attempts=200)
     for (p,) in ks.sample_placements(obj, surface):
+        if surface in DRAWERS and not _graspable(world, rng, p):
+            continue
         world.place_object(obj, surface, p.rel)
         return
     raise RuntimeError(f"no placement of {obj} on {surface}")
+
+
+def _graspable(world: World, rng: np.random.Generator, p) -> bool:
+    """Some grasp of ``p.obj`` at ``p`` (in a drawer) is reached from some base, with that
+    drawer open and the others closed."""
+    from .samplers import KitchenStreams
+
+    ks = KitchenStreams(world, rng, max_attempts=20)
+    with world.saved():
+        for d in DRAWERS:
+            world.set_drawer(d, DRAWER_TRAVEL if d == p.surface else 0.0)
+        for (g,) in ks.sample_grasps(p.obj):
+            for _ in ks.inv_reach(p.obj, p, g):
+                return True
+    return False
 
 
 def _place_occluder(world: World, rng: np.random.Generator, box: str) -> bool:
