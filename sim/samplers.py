@@ -60,6 +60,11 @@ def _grasp_from_tool(tool_in_obj: Pose) -> Pose:
     return invert(tool_in_obj)
 
 
+# Radians (max over the joints) around an arm configuration the robot is in but the planning
+# world says collides, within which a motion leaving it is not collision-checked.
+ESCAPE = 0.15
+
+
 class KitchenStreams:
     """Stream implementations bound to one world and one random generator."""
 
@@ -242,9 +247,7 @@ class KitchenStreams:
             tool = multiply(self.world_pose(p), invert(g.pose))
             if holding:
                 w.held.grasp = g.pose
-            path = self.approach_path(
-                base, tool, ignore_hand=() if holding else (obj,), seed=seed
-            )
+            path = self.approach_path(base, tool, ignore_hand=() if holding else (obj,), seed=seed)
         out = None if path is None else (path[0], tuple(path))
         self._kin_cache[key] = out
         return out
@@ -292,14 +295,27 @@ class KitchenStreams:
 
     def plan_arm_motion(self, base: Conf, q1: Conf, q2: Conf) -> tuple[tuple[Conf, ...]] | None:
         """Function stream ``motion`` (arm): an RRT-Connect path ``q1 -> q2`` at ``base``,
-        collision-free against the world, open drawers and the held object."""
+        collision-free against the world, open drawers and the held object.  When ``q1`` itself
+        collides (the arm stopped where the world as estimated puts an object it did not
+        touch), the path may leave it: configurations within :data:`ESCAPE` of ``q1`` are not
+        checked -- else no motion ever starts there, and a replan has no way out (Cook seed 3:
+        "no relaxed solution" after an arm motion stopped short of the block)."""
         w = self.world
         r = w.robot
         with w.saved():
             w.set_base(base)
+            check = self._arm_collision_fn(base)
+            start = np.asarray(q1, float)
+            escape = check(start)
+
+            def collision(q: np.ndarray) -> bool:
+                if escape and float(np.max(np.abs(np.asarray(q, float) - start))) <= ESCAPE:
+                    return False
+                return check(q)
+
             path = rrt_connect(
                 q1, q2, lambda: np.asarray(r.sample_arm(self.rng)),
-                self._arm_collision_fn(base), self.rng,
+                collision, self.rng,
                 resolution=ARM_RESOLUTION, max_iterations=self.rrt_iterations,
             )  # fmt: skip
         return None if path is None else (tuple(refine(path, ARM_RESOLUTION)),)

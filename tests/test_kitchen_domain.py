@@ -176,8 +176,8 @@ def test_the_robot_puts_down_what_it_holds_before_it_detects(files):
     # to what the robot holds, chose the same detection again and again.
     from dataclasses import replace
 
-    from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.sim.problem import initial_state, state_problem
+    from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.sim.samplers import KitchenStreams
 
     domain, streams = files

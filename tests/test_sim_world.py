@@ -216,3 +216,33 @@ def test_two_worlds_in_one_process():
     finally:
         a.close()
         b.close()
+
+
+def test_an_arm_motion_may_leave_a_configuration_the_estimated_world_says_collides(monkeypatch):
+    # The arm stopped where the true world let it (a motion collided one waypoint later); in the
+    # world as estimated, an object touches it there.  A motion must still be able to leave it,
+    # else a replan has no way out (Cook seed 3: "no relaxed solution").
+    import ssr_compile.sim.samplers as samplers
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.sim.tasks import make_task
+
+    task = make_task("cook", 0)
+    try:
+        w = task.world
+        ks = samplers.KitchenStreams(w, np.random.default_rng(0))
+        base = w.robot.get_base()
+        w.set_arm(ARM_TUCK)
+        wrist = multiply(w.robot.tool_pose(), ((0.0, 0.0, -0.1), (0.0, 0.0, 0.0, 1.0)))[0]
+        at_hand = (wrist, (0.0, 0.0, 0.0, 1.0))
+        w.place_object("block", "counter", multiply(invert(w.surface_frame("counter")), at_hand))
+        assert w.robot_collision()  # the start configuration touches the block
+        w.set_arm(ARM_CARRY)
+        assert not w.robot_collision()  # the goal does not
+        out = ks.plan_arm_motion(base, ARM_TUCK, ARM_CARRY)
+        assert out is not None
+        (path,) = out
+        assert np.allclose(path[0], ARM_TUCK) and np.allclose(path[-1], ARM_CARRY)
+        monkeypatch.setattr(samplers, "ESCAPE", 0.0)
+        assert ks.plan_arm_motion(base, ARM_TUCK, ARM_CARRY) is None
+    finally:
+        task.close()
