@@ -276,7 +276,14 @@ class KitchenModule:
             for o, pb in sorted(self.obstacles.items()):
                 p = self.obj_pose(pb)
                 w.place_object(o, p.surface, p.rel)
-            return self.ks.plan_arm_motion(bq, q1, q2)
+            # RRT-Connect may miss a path that exists; a function fails for the whole solve,
+            # and with the arm where it is, no other motion may be left (Cook seed 3 ended
+            # "no relaxed solution" on one miss, with a path there on the next try).
+            for _ in range(RETRIES):
+                path = self.ks.plan_arm_motion(bq, q1, q2)
+                if path is not None:
+                    return path
+            return None
 
     def sample_drawer_base(self, d: str):
         return self._each(lambda: self.ks.sample_drawer_base(d), moving=d)

@@ -298,3 +298,18 @@ def test_a_missed_pick_spreads_the_belief_so_the_robot_looks_again():
         assert 0.02 < float(after.std("counter")[:2].max()) < 0.05
     finally:
         ep.close()
+
+
+def test_an_arm_motion_is_tried_again_when_the_planner_misses(monkeypatch):
+    # RRT-Connect may miss a path that exists; the function fails for the whole solve, and with
+    # the arm where it is no other motion may be left (Cook seed 3: "no relaxed solution").
+    ep = make_episode("cook", 3)
+    try:
+        km = ep.agent.km
+        answers = iter([None, None, ("the path",)])
+        monkeypatch.setattr(km.ks, "plan_arm_motion", lambda *args: next(answers))
+        assert km.plan_arm_motion((0.0, 0.0, 0.0), (0.0,) * 7, (0.1,) * 7) == ("the path",)
+        answers = iter([None] * 10)
+        assert km.plan_arm_motion((0.0, 0.0, 0.0), (0.0,) * 7, (0.1,) * 7) is None
+    finally:
+        ep.close()
