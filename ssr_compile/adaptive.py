@@ -50,7 +50,6 @@ from .focused import (
     Solution,
     _FocusedLoop,
     _producers,
-    _size,
     _split_deferred,
     _steps,
     order_stream_plan,
@@ -264,13 +263,7 @@ class AdaptiveLoop(_FocusedLoop):
         if self.incumbent is not None and self.optimal:
             limit = min(limit, self.incumbent[0])
         bound = None if math.isinf(limit) else limit * compiled.scale
-        result = self.backend.solve(
-            compiled.domain, compiled.problem, time_limit=max(remaining, 0.01), cost_bound=bound
-        )
-        self.stats.planner_calls += 1
-        self.stats.planner_time += result.time
-        size = _size(compiled, getattr(self.backend, "last_operators", None))
-        self.stats.sizes.append(size)
+        result, size = self.call_planner(compiled, remaining, bound)
         # Sampling bought by this call: more for larger optimistic problems (slower calls).
         weight = size[3] if size[3] is not None else size[1]
         if self.first_size is None:

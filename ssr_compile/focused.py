@@ -590,13 +590,7 @@ class _FocusedLoop:
         bound, in planner units), and that bound."""
         remaining = self.deadline - time.monotonic()
         bound = None if math.isinf(self.max_cost) else self.max_cost * compiled.scale
-        result = self.backend.solve(
-            compiled.domain, compiled.problem, time_limit=max(remaining, 0.01), cost_bound=bound
-        )
-        self.stats.planner_calls += 1
-        self.stats.planner_time += result.time
-        size = _size(compiled, getattr(self.backend, "last_operators", None))
-        self.stats.sizes.append(size)
+        result, size = self.call_planner(compiled, remaining, bound)
         self.say(
             f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects, "
             f"{size[1]} facts, {size[2]} values"
@@ -604,6 +598,18 @@ class _FocusedLoop:
             + f"; planner {result.status} in {result.time:.3f} s"
         )
         return result, bound
+
+    def call_planner(self, compiled, remaining: float, bound: float | None):
+        """One backend call, counted in the statistics: its result and the compiled problem's
+        size (objects, facts, values, ground actions if the backend reports them)."""
+        result = self.backend.solve(
+            compiled.domain, compiled.problem, time_limit=max(remaining, 0.01), cost_bound=bound
+        )
+        self.stats.planner_calls += 1
+        self.stats.planner_time += result.time
+        size = _size(compiled, getattr(self.backend, "last_operators", None))
+        self.stats.sizes.append(size)
+        return result, size
 
     def raise_level(self, result, bound) -> Solution | None:
         """No plan at this level: the next level (failed instances may be retried there), or
