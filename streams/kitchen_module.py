@@ -162,10 +162,26 @@ class KitchenModule:
         it rests on, so inv-reach can never succeed (0 of 360 tries) and every plan through
         such a grasp fails -- the order of the grasps then decides whether Cook plans at all."""
         hz = self.world.half_extents[o][2]
-        for (g,) in self.ks.sample_grasps(o):
-            if g.kind == "side" and hz < MIN_SIDE_GRASP_HALF_HEIGHT:
-                continue
+        grasps = [
+            g
+            for (g,) in self.ks.sample_grasps(o)
+            if not (g.kind == "side" and hz < MIN_SIDE_GRASP_HALF_HEIGHT)
+        ]
+        pb = self.obstacles.get(o)
+        if pb is not None:
+            # Grasps some base reaches at the object's believed pose first (the random order
+            # kept within each group): a box standing against the wall is reached by one of
+            # its four grasps, and each plan through another one failed at inv-reach and
+            # cost the solver a level (Cook seed 0: 22 planner calls on one replan).
+            grasps.sort(key=lambda g: not self._grasp_reachable(o, pb, g))
+        for g in grasps:
             yield (g,)
+
+    def _grasp_reachable(self, o: str, pb: PoseBelief, g: Grasp) -> bool:
+        """One batch of ``inv-reach`` draws finds a base for ``g`` at ``pb``'s estimate."""
+        p = self.obj_pose(pb)
+        with self.planning(self._drawer_of(pb)):
+            return next(iter(self.ks.inv_reach(o, p, g)), None) is not None
 
     def sample_placement(self, o: str, s: str):
         for (p,) in self._each(
