@@ -179,6 +179,8 @@ class KitchenAgent:
         problem, values = state_problem(self.task, k)
         self.km.drawers = dict(k.drawers)
         held = None if k.held is None else k.held[0]
+        self.km.holding = k.held
+        self.km.arm_now = tuple(k.arm)
         self.km.obstacles = {
             o: pb for o, pb in k.beliefs.items() if o != held and is_localized(pb)
         }

@@ -28,7 +28,7 @@ from ssr_compile.sim.problem import canonical_surface, is_localized
 from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
 from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
-from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
+from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, Held, World
 
 from ssr_compile.belief.observation import (
     BeliefParameters,
@@ -73,6 +73,10 @@ class ArmConf(tuple):
         return id(self)
 
 
+def _same(q1, q2, tol: float = 1e-6) -> bool:
+    return len(q1) == len(q2) and float(np.max(np.abs(np.subtract(q1, q2)))) <= tol
+
+
 class KitchenModule:
     """Stream callables over one task's world."""
 
@@ -87,6 +91,9 @@ class KitchenModule:
         self._seeable_cache: dict = {}
         # localized objects at rest and their beliefs (set by a closed-loop agent each cycle)
         self.obstacles: dict[str, PoseBelief] = {}
+        # what the robot holds now (object, grasp) and its arm configuration (the same)
+        self.holding: tuple[str, Grasp] | None = None
+        self.arm_now: tuple[float, ...] | None = None
         # drawer motions planned so far (a replan from the arm configuration an earlier plan
         # moved to for one of them takes it again: solved anew from there, the redundant arm's
         # IK may not find a path that starts there, and the robot went back and forth)
@@ -292,6 +299,12 @@ class KitchenModule:
             for o, pb in sorted(self.obstacles.items()):
                 p = self.obj_pose(pb)
                 w.place_object(o, p.surface, p.rel)
+            if self.holding is not None and self.arm_now is not None and _same(q1, self.arm_now):
+                # The motion the robot may execute next carries what it holds: checked with
+                # it (tucking the arm with the cracker box in hand hit the robot in the true
+                # world, and the replan chose the same motion again, Cook seed 1).
+                o, g = self.holding
+                w.held = Held(o, g.pose)
             # RRT-Connect may miss a path that exists; a function fails for the whole solve,
             # and with the arm where it is, no other motion may be left (Cook seed 3 ended
             # "no relaxed solution" on one miss, with a path there on the next try).

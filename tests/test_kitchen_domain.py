@@ -199,3 +199,42 @@ def test_the_robot_puts_down_what_it_holds_before_it_detects(files):
         task.close()
     assert "detect" in plan
     assert plan.index("place") < plan.index("detect")
+
+
+def test_the_arm_is_tucked_only_with_an_empty_hand(files):
+    # Tucked is the empty hand's stow; with something in hand the arm stows at carry.  A plan
+    # that tucked the arm with the cracker box in hand failed in the true world, and the replan
+    # chose the same motion again (Cook seed 1).
+    from dataclasses import replace
+
+    from ssr_compile.sim.problem import initial_state, state_problem
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.sim.samplers import KitchenStreams
+
+    from ssr_compile import syntax as S
+
+    domain, streams = files
+    task = make_task("cook", 0)
+    try:
+        known = initial_state(task, seed=0)
+        grasp = KitchenStreams(task.world, np.random.default_rng(0)).grasps("cracker_box")[0]
+        beliefs = {o: b for o, b in known.beliefs.items() if o != "cracker_box"}
+        arm = tuple(v + 0.1 for v in ARM_CARRY)
+        known = replace(known, beliefs=beliefs, held=("cracker_box", grasp), arm=arm)
+        problem, _ = state_problem(task, known)
+
+        def atom(pred, *args):
+            return S.Atom(pred, tuple(S.Const(a) for a in args))
+
+        def plan_to(goal_atoms):
+            prob = replace(problem, goal=S.And(tuple(goal_atoms)))
+            compiled = compile_problem(domain, streams, prob, level=2)
+            return get_planner("fd").solve(compiled.domain, compiled.problem, time_limit=60)
+
+        held = atom("atgrasp", "cracker_box", "g-cracker_box")
+        carry = plan_to([held, atom("atconf", "arm", "aq-carry")])
+        assert carry.status == "solved", carry.message
+        tuck = plan_to([held, atom("atconf", "arm", "aq-tuck")])
+        assert tuck.status == "unsolvable", tuck.actions
+    finally:
+        task.close()

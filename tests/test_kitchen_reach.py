@@ -157,3 +157,30 @@ def test_the_lead_in_is_straight_and_bounded():
     assert all(abs(b[0] - a[0]) <= samplers.LEAD_STEP + 1e-12 for a, b in zip(lead, lead[1:]))
     far = [(0.5,) + (0.0,) * 6]
     assert samplers._lead_in(start, far) == far  # beyond LEAD_IN: unchanged
+
+
+def test_the_next_arm_motion_carries_what_the_robot_holds(cook0):
+    # The motion from the arm's configuration now is the one the robot may execute next: it is
+    # planned with the held object in the hand; motions from elsewhere (later in the plan) are
+    # planned again when their turn comes.
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.streams.kitchen_module import KitchenModule
+
+    km = KitchenModule(cook0, np.random.default_rng(5))
+    grasp = km.ks.grasps("cracker_box")[0]
+    seen = []
+
+    def record(base, q1, q2):
+        w = km.world
+        seen.append(None if w.held is None else (w.held.obj, w.held.grasp))
+        return ((q1, q2),)
+
+    km.ks.plan_arm_motion = record
+    base = km.world.robot.get_base()
+    km.holding, km.arm_now = ("cracker_box", grasp), ARM_CARRY
+    km.plan_arm_motion(base, ARM_CARRY, ARM_TUCK)
+    km.plan_arm_motion(base, ARM_TUCK, ARM_CARRY)
+    km.holding = None
+    km.plan_arm_motion(base, ARM_CARRY, ARM_TUCK)
+    assert seen == [("cracker_box", grasp.pose), None, None]
+    assert km.world.held is None  # the planning state is undone

@@ -101,7 +101,8 @@
 
   (:action move-arm
     :parameters (?bq ?q1 ?t ?q2)
-    :precondition (and (armmotion ?bq ?q1 ?t ?q2) (atconf base ?bq) (atconf arm ?q1))
+    :precondition (and (armmotion ?bq ?q1 ?t ?q2) (atconf base ?bq) (atconf arm ?q1)
+                       (or (handempty) (not (stowempty ?q2))))  ; tuck: the empty hand's stow
     :effect (and (atconf arm ?q2) (not (atconf arm ?q1))
                  (increase (total-cost) 1)))
 
