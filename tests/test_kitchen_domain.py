@@ -170,24 +170,30 @@ def test_bases_are_sampled_for_placements_but_not_for_placements_made_from_here(
     assert not reach_poses & here  # ... none for those sampled in reach of the robot
 
 
+def _holding_box(task, arm):
+    """Cook's problem with the robot holding the cracker box, its arm at ``arm``."""
+    from dataclasses import replace
+
+    from ssr_compile.sim.problem import initial_state, state_problem
+    from ssr_compile.sim.samplers import KitchenStreams
+
+    known = initial_state(task, seed=0)
+    grasp = KitchenStreams(task.world, np.random.default_rng(0)).grasps("cracker_box")[0]
+    beliefs = {o: b for o, b in known.beliefs.items() if o != "cracker_box"}
+    known = replace(known, beliefs=beliefs, held=("cracker_box", grasp), arm=arm)
+    return state_problem(task, known)[0]
+
+
 def test_the_robot_puts_down_what_it_holds_before_it_detects(files):
     # The camera sees past the robot as test-vis-robot checks it: arm tucked, hand empty.  A
     # held box once hid the block from every detection of Cook seed 3, and the planner, blind
     # to what the robot holds, chose the same detection again and again.
-    from dataclasses import replace
-
-    from ssr_compile.sim.problem import initial_state, state_problem
     from ssr_compile.sim.robot import ARM_CARRY
-    from ssr_compile.sim.samplers import KitchenStreams
 
     domain, streams = files
     task = make_task("cook", 0)
     try:
-        known = initial_state(task, seed=0)
-        grasp = KitchenStreams(task.world, np.random.default_rng(0)).grasps("cracker_box")[0]
-        beliefs = {o: b for o, b in known.beliefs.items() if o != "cracker_box"}
-        known = replace(known, beliefs=beliefs, held=("cracker_box", grasp), arm=ARM_CARRY)
-        problem, _ = state_problem(task, known)
+        problem = _holding_box(task, ARM_CARRY)
         for level in (3, 4, 5):
             compiled = compile_problem(domain, streams, problem, level=level)
             result = get_planner("fd").solve(compiled.domain, compiled.problem, time_limit=60)
@@ -207,21 +213,14 @@ def test_the_arm_is_tucked_only_with_an_empty_hand(files):
     # chose the same motion again (Cook seed 1).
     from dataclasses import replace
 
-    from ssr_compile.sim.problem import initial_state, state_problem
     from ssr_compile.sim.robot import ARM_CARRY
-    from ssr_compile.sim.samplers import KitchenStreams
 
     from ssr_compile import syntax as S
 
     domain, streams = files
     task = make_task("cook", 0)
     try:
-        known = initial_state(task, seed=0)
-        grasp = KitchenStreams(task.world, np.random.default_rng(0)).grasps("cracker_box")[0]
-        beliefs = {o: b for o, b in known.beliefs.items() if o != "cracker_box"}
-        arm = tuple(v + 0.1 for v in ARM_CARRY)
-        known = replace(known, beliefs=beliefs, held=("cracker_box", grasp), arm=arm)
-        problem, _ = state_problem(task, known)
+        problem = _holding_box(task, tuple(v + 0.1 for v in ARM_CARRY))
 
         def atom(pred, *args):
             return S.Atom(pred, tuple(S.Const(a) for a in args))
