@@ -77,10 +77,10 @@ SIDE_BEARING_LIMIT = 1.8
 # cycles), the pre-grasp pose with it, and a constrained replan could not pick from where an
 # earlier plan had put the arm.
 LEAD_IN = 0.3
+LEAD_STEP = 0.05  # radians between the lead-in's configurations
 # (m, rad): a sampled base must be collision-free this far off along x, y and yaw (about two
 # standard deviations of a base motion's landing error).
 BASE_MARGIN = (0.02, 0.03)
-LEAD_STEP = 0.05
 
 
 def _lead_in(start: Conf, path: list[Conf]) -> list[Conf]:

@@ -177,9 +177,9 @@ class KitchenModule:
         pb = self.obstacles.get(o)
         if pb is not None:
             # Grasps some base reaches at the object's believed pose first (the random order
-            # kept within each group): a box standing against the wall is reached by one of
-            # its four grasps, and each plan through another one failed at inv-reach and
-            # cost the solver a level (Cook seed 0: 22 planner calls on one replan).
+            # kept within each group): where Cook seed 0's cracker box stands, one of its four
+            # grasps is reached, and each plan through another one failed at inv-reach and
+            # cost the solver a level (22 planner calls on one replan).
             grasps.sort(key=lambda g: not self._grasp_reachable(o, pb, g))
         for g in grasps:
             yield (g,)
@@ -301,8 +301,8 @@ class KitchenModule:
                 w.place_object(o, p.surface, p.rel)
             if self.holding is not None and self.arm_now is not None and _same(q1, self.arm_now):
                 # The motion the robot may execute next carries what it holds: checked with
-                # it (tucking the arm with the cracker box in hand hit the robot in the true
-                # world, and the replan chose the same motion again, Cook seed 1).
+                # it (an arm motion with the cracker box in hand failed in the true world, and
+                # the replan chose the same motion again, Cook seed 1).
                 o, g = self.holding
                 w.held = Held(o, g.pose)
             # RRT-Connect may miss a path that exists; a function fails for the whole solve,
