@@ -11,8 +11,10 @@ Streams are evaluated in a *planning state* of the world, never in its latent st
 are taken out of the scene (their poses are beliefs; object-object placement conflicts are the
 ``test-cfree`` stream's job, visibility the ``test-vis`` stream's), the arm is tucked and the
 hand empty, the drawers stay as the robot saw them, except that grasps of a pose in a drawer are
-computed with that drawer open.  Approximations, on purpose: arm and base motions are planned
-with the hand empty (the carried object is not collision-checked) and without the objects.
+computed with that drawer open.  Approximations, on purpose: base motions are planned with
+the hand empty and without the objects; arm motions avoid the localized objects, and only the
+one that starts where the arm is now (the next to execute) carries what the robot holds --
+the others are planned again when their turn comes.
 """
 
 from __future__ import annotations
