@@ -301,17 +301,26 @@ class KitchenModule:
             for o, pb in sorted(self.obstacles.items()):
                 p = self.obj_pose(pb)
                 w.place_object(o, p.surface, p.rel)
-            if self.holding is not None and self.arm_now is not None and _same(q1, self.arm_now):
+            # A motion is certified both ways (see :func:`to_action`), so one that ends where
+            # the arm is now may be executed next, reversed: it is planned from here.
+            now = self.arm_now
+            reverse = now is not None and not _same(q1, now) and _same(q2, now)
+            if self.holding is not None and now is not None and (_same(q1, now) or reverse):
                 # The motion the robot may execute next carries what it holds: checked with
                 # it (an arm motion with the cracker box in hand failed in the true world, and
-                # the replan chose the same motion again, Cook seed 1).
+                # the replan chose the same motion again, Cook seed 1; Stow seeds 5 and 9 took
+                # a motion planned with the hand empty towards the pick, reversed, 90 times).
                 o, g = self.holding
                 w.held = Held(o, g.pose)
             # RRT-Connect may miss a path that exists; a function fails for the whole solve,
             # and with the arm where it is, no other motion may be left (Cook seed 3 ended
             # "no relaxed solution" on one miss, with a path there on the next try).
             for _ in range(RETRIES):
-                path = self.ks.plan_arm_motion(bq, q1, q2)
+                if reverse:
+                    out = self.ks.plan_arm_motion(bq, q2, q1)
+                    path = None if out is None else (tuple(out[0][::-1]),)
+                else:
+                    path = self.ks.plan_arm_motion(bq, q1, q2)
                 if path is not None:
                     return path
             return None

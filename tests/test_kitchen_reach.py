@@ -168,21 +168,28 @@ def test_the_next_arm_motion_carries_what_the_robot_holds(cook0):
 
     km = KitchenModule(cook0, np.random.default_rng(5))
     grasp = km.ks.grasps("cracker_box")[0]
-    seen = []
+    seen, asked = [], []
 
     def record(base, q1, q2):
         w = km.world
         seen.append(None if w.held is None else (w.held.obj, w.held.grasp))
+        asked.append((q1, q2))
         return ((q1, q2),)
 
     km.ks.plan_arm_motion = record
     base = km.world.robot.get_base()
+    other = tuple(v + 0.2 for v in ARM_TUCK)
     km.holding, km.arm_now = ("cracker_box", grasp), ARM_CARRY
-    km.plan_arm_motion(base, ARM_CARRY, ARM_TUCK)
-    km.plan_arm_motion(base, ARM_TUCK, ARM_CARRY)
+    assert km.plan_arm_motion(base, ARM_CARRY, ARM_TUCK) == ((ARM_CARRY, ARM_TUCK),)
+    km.plan_arm_motion(base, ARM_TUCK, other)
+    # A motion is certified both ways: one that ends where the arm is may run next, reversed.
+    # It is planned from here, with the held object, and handed back in the asked direction.
+    assert km.plan_arm_motion(base, ARM_TUCK, ARM_CARRY) == ((ARM_CARRY, ARM_TUCK)[::-1],)
     km.holding = None
     km.plan_arm_motion(base, ARM_CARRY, ARM_TUCK)
-    assert seen == [("cracker_box", grasp.pose), None, None]
+    held = ("cracker_box", grasp.pose)
+    assert seen == [held, None, held, None]
+    assert asked[2] == (ARM_CARRY, ARM_TUCK)  # planned from where the arm is
     assert km.world.held is None  # the planning state is undone
 
 
