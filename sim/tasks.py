@@ -19,13 +19,13 @@ A :class:`Task` gives the world in its latent initial state, the prior belief as
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ssr_compile.belief.particles import Surface
 
+from .geometry import yaw_of
 from .perception import visible_fraction
 from .robot import ARM_TUCK
 from .world import DRAWER_TRAVEL, DRAWERS, PARK_BASE, World
@@ -118,7 +118,7 @@ def _graspable(world: World, rng: np.random.Generator, p) -> bool:
 
     ks = KitchenStreams(world, rng, max_attempts=20)
     (x, y, z), q = p.rel
-    yaw = math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2))
+    yaw = yaw_of(q)
     dxy, dyaw = GRASP_SLACK
     poses = [p]
     for ox, oy, oyaw in ((dxy, 0, 0), (-dxy, 0, 0), (0, dxy, 0), (0, -dxy, 0), (0, 0, dyaw)):

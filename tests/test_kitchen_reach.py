@@ -6,7 +6,7 @@ estimate moved a little."""
 import numpy as np
 import pytest
 import ssr_compile.sim.samplers as samplers
-from ssr_compile.sim.geometry import multiply, invert, rotate
+from ssr_compile.sim.geometry import invert, multiply, rotate, yaw_of
 from ssr_compile.sim.robot import ARM_TUCK
 from ssr_compile.sim.samplers import KitchenStreams
 from ssr_compile.sim.tasks import make_task
@@ -88,7 +88,7 @@ def test_grasps_reached_at_the_believed_pose_come_first(cook0):
     w = cook0.world
     km = KitchenModule(cook0, np.random.default_rng(2))
     (x, y, z), q = w.object_pose("cracker_box")
-    yaw = float(np.arctan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2)))
+    yaw = yaw_of(q)
     pb = PoseBelief.point("cracker_box", w.surfaces and _counter(w), (x, y, z, yaw))
     p = km.obj_pose(pb)
     probe = KitchenStreams(w, np.random.default_rng(3), max_attempts=100)
@@ -206,7 +206,7 @@ def test_a_drawer_object_is_reached_from_estimates_near_its_pose():
         ks = KitchenStreams(w, np.random.default_rng(7), max_attempts=40)
         p = ks.current_pose("block")
         (x, y, _), q = p.rel
-        yaw = float(np.arctan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2)))
+        yaw = yaw_of(q)
         shifted = [p]
         for ox, oy in ((0.015, 0.0), (-0.015, 0.0), (0.0, 0.015), (0.0, -0.015)):
             rel = w.rest_pose("block", p.surface, x + ox, y + oy, yaw)
