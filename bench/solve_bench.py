@@ -142,7 +142,7 @@ def main() -> None:
     for o in args.option:
         key, _, value = o.partition("=")
         options[key] = float(value) if "." in value else int(value) if value.isdigit() else value
-    options = {k: bool(v) if k in ("share", "eager_tests") else v for k, v in options.items()}
+    options = {k: bool(v) if k in ("share", "eager_tests", "leaves") else v for k, v in options.items()}
     args.runs = args.runs or (5 if args.full else 1)
     head = (
         f"{'example':16s} {'problem':22s} {'defer':5s} {'algorithm':9s} {'status':8s} {'median s':>9s} "

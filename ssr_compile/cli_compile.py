@@ -210,8 +210,16 @@ def _run_compile(args: argparse.Namespace) -> int:
         note = "compiled the domain only (derived predicates, costs); give a PROBLEM to instantiate streams"
         summary = {"level": None, "scale": lowered.scale, "note": note}
     else:
+        # Files for any planner: every optimistic object keeps its own name, so objects.json
+        # maps each one in a plan back to its stream instance (no shared leaf objects).
         compiled = compile_problem(
-            domain, streams, problem, caps=caps, level=args.level, unit_cost=args.unit_cost
+            domain,
+            streams,
+            problem,
+            caps=caps,
+            level=args.level,
+            unit_cost=args.unit_cost,
+            leaves=False,
         )
         files["domain.pddl"] = to_text(compiled.domain, shorthand=args.shorthand)
         files["problem.pddl"] = to_text(compiled.problem, shorthand=args.shorthand)

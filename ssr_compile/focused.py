@@ -348,6 +348,7 @@ def solve(
     share: bool = False,
     state: ReplanState | None = None,
     algorithm: str = "focused",
+    leaves: bool = True,
 ) -> Solution:
     """Solve a PDDLStream problem with the Focused algorithm (see the module docstring).
 
@@ -374,6 +375,9 @@ def solve(
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
     object); off by default, as it is not faster on the shipped examples yet.
+    ``leaves``: one object in the planner's task for all the optimistic leaf outputs of a
+    stream (motion trajectories; :mod:`ssr_compile.compile.leaves`), mapped back per instance;
+    on by default (the kitchen's replans: 4,225 objects down to 128 at the same level).
     ``algorithm``: "focused" (this module's loop) or "adaptive" (a queue of plan skeletons
     sampled incrementally between planner calls: :mod:`ssr_compile.adaptive`).
     Returns a :class:`Solution` with status "solved", "unsolvable" or "timeout".
@@ -399,6 +403,7 @@ def solve(
         redraws=redraws,
         accept_drawn=accept_drawn,
         share=share,
+        leaves=leaves,
     )
     return loop.run()
 
@@ -456,6 +461,7 @@ class _FocusedLoop:
         redraws: int,
         accept_drawn: bool | None,
         share: bool,
+        leaves: bool = True,
     ):
         from .planners import get_planner
 
@@ -463,6 +469,7 @@ class _FocusedLoop:
         self.deadline = self.start + time_limit
         self.time_limit, self.max_cost, self.defer = time_limit, max_cost, defer
         self.max_level, self.unit_cost, self.share = max_level, unit_cost, share
+        self.leaves = leaves
         self.domain, self.streams, self.problem, self.module = domain, streams, problem, module
         self.state = state
         self.backend = get_planner(planner) if isinstance(planner, str) else planner
@@ -581,6 +588,7 @@ class _FocusedLoop:
             is_constant=self.state.is_constant,
             unit_cost=self.unit_cost,
             share=self.share,
+            leaves=self.leaves,
         )
         self.stats.compile_time += time.perf_counter() - started
         return compiled

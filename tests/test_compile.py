@@ -17,6 +17,7 @@ import pytest
 from conftest import require_corpus
 
 from ssr_compile import syntax as S
+from ssr_compile.compile.leaves import SharedLeaves
 from ssr_compile.compile.costs import choose_scale, self_loop_cost, to_int
 from ssr_compile.compile.derived import compile_away
 from ssr_compile.compile.instantiate import DEFAULT_FUNCTION_VALUE, Instance, instantiate
@@ -98,8 +99,8 @@ def test_pick_place_compiles_reads_back_and_solves(problem):
     assert not flat.domain.axioms
     task = up_read(flat.domain, flat.problem)
     assert {a.name for a in task.actions} == {"move", "pick", "place"}
-    _, flat_plan = fd_solve(flat)
-    check_valid(flat.domain, flat.problem, flat_plan)
+    flat_result, _ = fd_solve(flat)
+    check_valid(flat.domain, flat.problem, flat_result.actions)
     names = [n for n, _ in plan]
     assert names[-1] == "place" and plan[-1][1][0] == "a"
     # Optimistically every cfree test holds, so even the blocked region looks free: only
@@ -585,5 +586,8 @@ def test_optimistic_names_accepted_by_every_reader():
     opt = c.instantiation.optimistic_objects()
     assert opt and all(name[0].isalpha() for name in opt)
     emitted = {o.name for o in c.problem.objects}
-    assert opt <= emitted  # not renamed: already plain identifiers
+    shared = next(p for p in c.passes if isinstance(p, SharedLeaves))
+    merged = {name for names in shared.merged.values() for name in names}
+    assert set(shared.merged) <= emitted and merged and merged.isdisjoint(emitted)
+    assert opt - merged <= emitted  # not renamed: already plain identifiers
     up_read(c.domain, c.problem)

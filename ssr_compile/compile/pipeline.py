@@ -9,7 +9,10 @@ package, in the order :func:`compile_problem` runs them:
 2. ``instantiate``: optimistic stream instantiation (:class:`~.instantiate.Instantiation`:
    optimistic objects and facts, their provenance);
 3. ``constraints``: Algorithm 2, when a plan tail is given (:class:`~.constraints.Constrained`);
-4. ``lower``, which fits the task to the backend's :class:`~.capabilities.Capabilities` with
+4. ``leaves``: one shared object for the optimistic leaf outputs of a stream (motion
+   trajectories: nothing consumes them, their facts name the inputs), mapped back per instance
+   (:class:`~.leaves.SharedLeaves`);
+5. ``lower``, which fits the task to the backend's :class:`~.capabilities.Capabilities` with
    ``ground`` (for backends that take a ground task), ``derived`` (axioms compiled away when
    unsupported), ``quantifiers``, ``disjunctions``, ``negations``, ``costs`` (integer action
    costs; the result keeps the ``scale``) and ``rename`` (names every reader accepts), in that
@@ -35,8 +38,13 @@ from .instantiate import (  # noqa: F401  (declare_stream_predicates: re-exporte
     declare_stream_predicates,
     instantiate,
 )
+from .leaves import share_leaves
 from .lower import Lowered, lower
 from .result import PassResult, Plan, map_back
+
+# Share the optimistic leaf outputs of streams (pass 4); measurement scripts turn it off to
+# compare (bench/solve_bench.py --no-shared-leaves).
+SHARE_LEAVES = True
 
 # Everything supported (``FullCapabilities`` is the old name of the type).
 EVERYTHING = Capabilities()
@@ -101,6 +109,7 @@ def compile_problem(
     scale: int | None = None,
     unit_cost: bool = False,
     share: bool = False,
+    leaves: bool | None = None,
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
     passes: list[PassResult] = [objects_as_constants(domain, problem)]
@@ -126,6 +135,10 @@ def compile_problem(
             source.domain, source.problem, plan_tail, is_constant or (lambda v: False)
         )
         passes.append(constrained)
+    if inst is not None and (SHARE_LEAVES if leaves is None else leaves):
+        shared = share_leaves(passes[-1].domain, passes[-1].problem, streams, inst)
+        if shared.merged:
+            passes.append(shared)
     cost_functions = {f.name for f in streams.functions} if streams is not None else set()
     lowered = lower(
         passes[-1].domain,
