@@ -216,11 +216,22 @@ class KitchenModule:
             return (start, *path[1:])
         return None
 
+    def _place_obstacles(self, w, but: str | None = None) -> None:
+        """The objects the robot has localized, where it believes they are (``but`` one)."""
+        for o, pb in sorted(self.obstacles.items()):
+            if o != but:
+                p = self.obj_pose(pb)
+                w.place_object(o, p.surface, p.rel)
+
     def _kin(self, o: str, pb: PoseBelief, g: Grasp, bq, start=None):
         p = self.obj_pose(pb)
-        with self.planning(self._drawer_of(pb)):
+        with self.planning(self._drawer_of(pb)) as w:
             if not self._reachable(bq, self.ks.world_pose(p)[0]):
                 return None
+            # The approach avoids the other objects as the arm motion to it does: a pre-grasp
+            # inside a box placed beside the block had no arm motion to it, and the robot
+            # moved to the same base 80 times (Cook seed 1, motions deferred).
+            self._place_obstacles(w, but=o)
             res = self.ks.inv_kin(o, p, g, bq, seed=start)
         return self._snap(None if res is None else tuple(res[1]), start)
 
@@ -298,9 +309,7 @@ class KitchenModule:
         they are (:attr:`obstacles`): the arm leaving an object it just placed must not sweep
         through it, which the true world refuses (and a replan would try the same path again)."""
         with self.planning() as w:
-            for o, pb in sorted(self.obstacles.items()):
-                p = self.obj_pose(pb)
-                w.place_object(o, p.surface, p.rel)
+            self._place_obstacles(w)
             # A motion is certified both ways (see :func:`to_action`), so one that ends where
             # the arm is now may be executed next, reversed: it is planned from here.
             now = self.arm_now
