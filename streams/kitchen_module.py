@@ -228,11 +228,17 @@ class KitchenModule:
         with self.planning(self._drawer_of(pb)) as w:
             if not self._reachable(bq, self.ks.world_pose(p)[0]):
                 return None
-            # The approach avoids the other objects as the arm motion to it does: a pre-grasp
-            # inside a box placed beside the block had no arm motion to it, and the robot
-            # moved to the same base 80 times (Cook seed 1, motions deferred).
-            self._place_obstacles(w, but=o)
             res = self.ks.inv_kin(o, p, g, bq, seed=start)
+            if res is not None and start is None:
+                # The arm motion to the pre-grasp avoids the localized objects: so must the
+                # pre-grasp.  One inside a box placed beside the block had no arm motion to
+                # it, and with motions deferred the robot moved to the same base 80 times
+                # (Cook seed 1).  (The approach from it may pass close to them, as before.)
+                self._place_obstacles(w, but=o)
+                w.set_base(bq)
+                w.set_arm(res[0])
+                if w.robot_collision():
+                    return None
         return self._snap(None if res is None else tuple(res[1]), start)
 
     def inv_kin(self, o: str, pb: PoseBelief, g: Grasp, bq):
