@@ -13,8 +13,9 @@ import time
 
 
 def first_plan(task: str, seed: int, leaves: bool) -> dict:
-    from ssr_compile.focused import solve
     from ssr_compile.streams.kitchen_env import make_episode
+
+    from ssr_compile.focused import solve
 
     episode = make_episode(task, seed)
     try:
