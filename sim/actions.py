@@ -111,6 +111,10 @@ def execute(
                 world.set_base(prev)
                 raise ExecutionError(f"base motion collides at waypoint {i}")
         goal = np.asarray(action.path[-1], float)
+        if all(_at(q, action.path[0], 1e-6) for q in action.path):
+            # Told to stay where it is (a plan tail's base motion whose end is the base the
+            # robot reached): it does not move, so it does not land elsewhere either.
+            return Outcome(info={"base": tuple(float(v) for v in r.get_base())})
         landed = goal + rng.normal(size=3) * np.array([noise.xy, noise.xy, noise.yaw])
         landed[2] = wrap_angle(landed[2])
         world.set_base(landed)

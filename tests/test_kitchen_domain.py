@@ -237,3 +237,22 @@ def test_the_arm_is_tucked_only_with_an_empty_hand(files):
         assert tuck.status == "unsolvable", tuck.actions
     finally:
         task.close()
+
+
+def test_a_base_motion_that_stays_put_lands_without_noise():
+    # A constrained replan binds a tail's base motion to the base the robot reached: the
+    # motion goes nowhere (Cook seed 0 ran "move-base bq0 t-3 bq0"), and the robot does not
+    # land elsewhere: the rest of the plan was built for the base it is at.
+    from ssr_compile.sim.actions import BaseNoise
+
+    task = make_task("inspect", 0)
+    try:
+        here = tuple(task.world.robot.get_base())
+        noise = BaseNoise(0.05, 0.05)
+        out = execute(task.world, MoveBase((here, here)), np.random.default_rng(3), noise)
+        assert out.ok and task.world.robot.get_base() == pytest.approx(here, abs=1e-9)
+        there = (here[0] - 0.05, here[1], here[2])
+        out = execute(task.world, MoveBase((here, there)), np.random.default_rng(3), noise)
+        assert out.ok and task.world.robot.get_base() != pytest.approx(there, abs=1e-3)
+    finally:
+        task.close()
