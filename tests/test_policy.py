@@ -270,3 +270,14 @@ def test_the_solvers_own_overrun_times_the_attempt_out_not_the_episode(monkeypat
     assert result.cycles[1].constrained == "timeout"
     assert 0.5 <= result.cycles[1].constrained_time < 5.0
     assert [a.split()[0] for a in result.actions] == ["(move-base", "(pick"]
+
+
+def test_an_unconstrained_attempt_climbs_past_the_constrained_attempts_last_level():
+    # "No plan up to the last level" of the unconstrained attempt ends the episode, and a level
+    # cut-off proves nothing: it goes further than a constrained attempt (which falls back).
+    # Progress's first plan needs level 2 (a base, then the grasp's kinematics from it).
+    episode, capped = _progress(0, "both", max_level=1, unconstrained_max_level=1)
+    assert not capped.success and capped.reason.startswith("no plan: no plan found up to level 1")
+    episode, result = _progress(0, "both", max_level=1)
+    assert result.success, result.reason
+    assert PolicySettings().unconstrained_max_level > PolicySettings().max_level
