@@ -86,8 +86,9 @@ def _follow_arm(world: World, path, check: bool = True) -> None:
         prev = world.robot.get_arm()
         world.set_arm(q)
         if check and i > 0 and world.robot_collision():
+            hit = ", ".join(world.robot_contacts()) or "the world"
             world.set_arm(prev)
-            raise ExecutionError(f"arm motion collides at waypoint {i}")
+            raise ExecutionError(f"arm motion collides with {hit} at waypoint {i}")
 
 
 def _at(conf_a, conf_b, tol: float = 0.05) -> bool:

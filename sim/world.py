@@ -510,6 +510,21 @@ class World:
                 return True
         return False
 
+    def robot_contacts(self) -> list[str]:
+        """What the robot (or what it holds) touches now, by name (for messages)."""
+        names = {self.floor: "floor", self.counter: "counter", self.stove: "stove"}
+        names[self.cabinet] = "cabinet"
+        names.update({b: n for n, b in self.objects.items()})
+        out = []
+        for body in self.obstacles():
+            if self._pair(self.robot.body, body) or (
+                self.held is not None and self._pair(self.objects[self.held.obj], body)
+            ):
+                out.append(names.get(body, f"body {body}"))
+        if self._arm_over_base():
+            out.append("its own base")
+        return out
+
     def _arm_over_base(self, inflate: float = 0.08) -> bool:
         r = self.robot
         base = self.link_pose(r.body, r.base_link)

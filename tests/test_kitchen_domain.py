@@ -256,3 +256,20 @@ def test_a_base_motion_that_stays_put_lands_without_noise():
         assert out.ok and task.world.robot.get_base() != pytest.approx(there, abs=1e-3)
     finally:
         task.close()
+
+
+def test_an_arm_motion_stopped_by_the_world_names_what_it_hit():
+    from ssr_compile.sim.actions import ExecutionError, MoveArm
+    from ssr_compile.sim.robot import ARM_TUCK
+
+    task = make_task("inspect", 0)
+    try:
+        w = task.world
+        start = tuple(w.robot.get_arm())
+        assert np.allclose(start, ARM_TUCK)
+        # swing the shoulder down in small steps until the arm meets something
+        path = [tuple(np.add(start, [0, 0.05 * k, 0, 0, 0, 0, 0])) for k in range(40)]
+        with pytest.raises(ExecutionError, match=r"collides with \w+.* at waypoint \d+"):
+            execute(w, MoveArm(tuple(path)), np.random.default_rng(0))
+    finally:
+        task.close()

@@ -224,35 +224,3 @@ def test_a_drawer_object_is_reached_from_estimates_near_its_pose():
     finally:
         task.close()
 
-
-def test_the_approach_avoids_the_other_objects_as_the_arm_motion_does(cook0):
-    # A pre-grasp and approach solved with the other objects out of the world ended inside a
-    # box the robot had placed beside the block: the arm motion to it (planned with the
-    # localized objects) never existed, and with motions deferred the robot moved to the same
-    # base for 80 cycles (Cook seed 1).  inv-kin sees the localized objects too.
-    from ssr_compile.belief.particles import PoseBelief
-    from ssr_compile.streams.kitchen_module import KitchenModule
-
-    w = cook0.world
-    km = KitchenModule(cook0, np.random.default_rng(6))
-    (x, y, z), q = w.object_pose("block")
-    block = PoseBelief.point("block", _counter(w), (x, y, z, yaw_of(q)))
-    found = None
-    for (g,) in km.sample_grasp("block"):
-        for b in km.inv_reach("block", block, g):
-            if b is not None and km.inv_kin("block", block, g, b[0]) is not None:
-                found = (g, b[0])
-                break
-        if found:
-            break
-    assert found is not None
-    g, base = found
-    pre, _ = km.inv_kin("block", block, g, base)
-    hand = w.robot.forward_kinematics(base, pre)[0]
-    # the sugar box stands where the hand is at the pre-grasp (the robot put it there)
-    (_, _, sz), sq = w.object_pose("sugar_box")
-    box = PoseBelief.point("sugar_box", _counter(w), (hand[0], hand[1], sz, yaw_of(sq)))
-    km.obstacles = {"sugar_box": box, "block": block}
-    assert km.inv_kin("block", block, g, base) is None
-    km.obstacles = {"block": block}  # the target itself is no obstacle to its own grasp
-    assert km.inv_kin("block", block, g, base) is not None
