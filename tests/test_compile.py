@@ -17,10 +17,10 @@ import pytest
 from conftest import require_corpus
 
 from ssr_compile import syntax as S
-from ssr_compile.compile.leaves import SharedLeaves
 from ssr_compile.compile.costs import choose_scale, self_loop_cost, to_int
 from ssr_compile.compile.derived import compile_away
 from ssr_compile.compile.instantiate import DEFAULT_FUNCTION_VALUE, Instance, instantiate
+from ssr_compile.compile.leaves import SharedLeaves
 from ssr_compile.compile.pipeline import FullCapabilities, compile_problem
 from ssr_compile.errors import UnsupportedError
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
