@@ -164,6 +164,7 @@ class KitchenAgent:
         self.rng = rng
         self.model = MODEL if model is None else model
         self.known: KnownState | None = None
+        self.placed: set[str] = set()  # objects the robot has put down (and not picked since)
         self.km = KitchenModule(self.task, rng)
         self.surfaces = {s: canonical_surface(world, s) for s in world.surfaces}
         self._constants = (
@@ -181,9 +182,8 @@ class KitchenAgent:
         held = None if k.held is None else k.held[0]
         self.km.holding = k.held
         self.km.arm_now = tuple(k.arm)
-        self.km.obstacles = {
-            o: pb for o, pb in k.beliefs.items() if o != held and is_localized(pb)
-        }
+        self.km.obstacles = {o: pb for o, pb in k.beliefs.items() if o != held and is_localized(pb)}
+        self.km.settled = set(self.placed) & set(self.km.obstacles)
         module = StreamsModule(
             "ssr_compile.streams.kitchen_module",
             streams=self.km.streams(),
@@ -265,6 +265,7 @@ class KitchenAgent:
             o, g = step.values[0], step.values[2]
             k.held = (o, g)
             k.beliefs.pop(o, None)
+            self.placed.discard(o)
         elif step.name == "pick" and not obs.ok and step.values[0] in k.beliefs:
             o = step.values[0]
             k.beliefs[o] = self._missed(k.beliefs[o])
@@ -272,6 +273,7 @@ class KitchenAgent:
             o, pb = step.values[0], step.values[1]
             k.held = None
             k.beliefs[o] = self._placed(o, pb)
+            self.placed.add(o)
             if obs.stove_on and pb.most_likely_surface() == "stove":
                 k.cooked.add(o)
         if obs.held is None and k.held is not None and step.name != "place":
@@ -305,9 +307,7 @@ class KitchenAgent:
         try:
             for o, pb in sorted(k.beliefs.items()):
                 pbw = to_world(pb, k.drawers)
-                mask = visibility_mask(
-                    pbw, w.camera, w.half_extents[o], ignore=(w.objects[o],)
-                )
+                mask = visibility_mask(pbw, w.camera, w.half_extents[o], ignore=(w.objects[o],))
                 det = obs.detections.get(o)
                 post = update(pbw, det, mask, self.model, rng=self.rng)
                 k.beliefs[o] = to_canonical(post, k.drawers)
