@@ -176,7 +176,6 @@ def obscost(o: str, pb: PoseBelief, obs: Observation) -> float | None:
     return cost if math.isfinite(cost) else None
 
 
-
 STREAM_INFO = {
     "sample-obs": {"p_success": 1.0, "cost": 0.1},
     "update-belief": {"kind": "function", "cost": 0.1},
@@ -229,7 +228,6 @@ class DetectStreams:
             o, pb, self.rng, delta=BELIEF.delta, eps=BELIEF.eps, heaviest_first=True
         )
 
-
     def vis_test(self, o: str, obs: Observation, o2: str, pb2: PoseBelief) -> bool:
         """``test-vis`` / ``BVis ?o ?obs ?o2 ?pb2``: ``o2`` under ``pb2`` leaves ``X_i`` visible
         with probability at least ``1 - eps`` (ray casts, paper §V-B)."""
@@ -237,7 +235,6 @@ class DetectStreams:
             return True  # an object never occludes itself (the derived predicate excludes it)
         sc = self.scene()
         return bvis(obs, sc.ids[o2], pb2, sc.camera, half_extents=BODIES[o].half_extents)
-
 
     def sample_aside(self, b: str) -> Iterator[tuple[PoseBelief]]:
         """Placements of box ``b`` on its aside strip (known poses: point beliefs), endless."""
@@ -329,10 +326,7 @@ class DetectWorld:
             return {"action": "move-aside", "ok": True}
         if step.name == "pick":
             _, estimate = step.values[1].point_estimate()
-            ok = (
-                not self.holding
-                and math.dist(estimate[:2], self.target[:2]) <= GRASP_TOLERANCE
-            )
+            ok = not self.holding and math.dist(estimate[:2], self.target[:2]) <= GRASP_TOLERANCE
             self.holding = self.holding or ok
             return {"action": "pick", "ok": ok}
         return {"action": step.name, "ok": False}
@@ -375,7 +369,10 @@ class DetectAgent:
                     pb, sc.camera, BODIES["target"].half_extents, ignore=[sc.ids["target"]]
                 )
             z = observation["detection"]
-            self._set("target", update(pb, None if z is None else np.array(z), mask, BELIEF.model, rng=self.rng))
+            self._set(
+                "target",
+                update(pb, None if z is None else np.array(z), mask, BELIEF.model, rng=self.rng),
+            )
             self.last = "detected" if z is not None else "missed"
         elif observation["action"] == "move-aside":
             self._set(step.args[0], step.values[2])
@@ -427,7 +424,11 @@ class DetectAgent:
     def summary(self) -> str:
         pb = self.beliefs["target"]
         probs = {"behind A": 0.0, "behind B": 0.0, "visible spot": 0.0}
-        for spot, label in ((BEHIND_A, "behind A"), (BEHIND_B, "behind B"), (VISIBLE_SPOT, "visible spot")):
+        for spot, label in (
+            (BEHIND_A, "behind A"),
+            (BEHIND_B, "behind B"),
+            (VISIBLE_SPOT, "visible spot"),
+        ):
             near = np.linalg.norm(pb.poses[:, :2] - np.array(spot), axis=1) <= 0.08
             probs[label] = float(pb.weights[near].sum())
         spread = float(pb.std()[:2].max())
@@ -453,4 +454,8 @@ def make_episode(problem: str | None = None, seed: int = 0):
         raise ValueError(f"no problem '{problem}'; expected one of {', '.join(PROBLEM_BOXES)}")
     ex = load_example("belief-detect")
     boxes = PROBLEM_BOXES[key]
-    return Episode(DetectWorld(seed, dict(boxes)), DetectAgent(ex.domain, ex.streams, seed, dict(boxes)), f"belief-detect/{key}")
+    return Episode(
+        DetectWorld(seed, dict(boxes)),
+        DetectAgent(ex.domain, ex.streams, seed, dict(boxes)),
+        f"belief-detect/{key}",
+    )

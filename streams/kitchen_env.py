@@ -269,6 +269,9 @@ class KitchenAgent:
         elif step.name == "pick" and not obs.ok and step.values[0] in k.beliefs:
             o = step.values[0]
             k.beliefs[o] = self._missed(k.beliefs[o])
+        elif step.name == "place" and not obs.ok and obs.held is not None:
+            # still in the hand: the world refused this placement (not proposed again)
+            self.km.failed_places.append((step.values[0], step.values[1]))
         elif step.name == "place" and obs.held is None and k.held is not None:
             o, pb = step.values[0], step.values[1]
             k.held = None

@@ -18,6 +18,8 @@ from ssr_compile.sim.tasks import TASKS
 
 STREAMS: dict = {}  # bound per problem by for_problem()
 TASK_SEED = 0
+
+
 def task_name(problem_path: str | Path) -> str:
     """The task a kitchen problem file states: its problem name ``kitchen-<task>-<seed>`` (so
     a copy under any file name works), else its file name ``problem-<task>.pddl``."""

@@ -108,7 +108,9 @@ def make_module(seed: int = 0, values: dict | None = None) -> StreamsModule:
             "sample-grasp": StreamInfo(constant_outputs=True, cost=0.1),
             "inv-reach": StreamInfo(cost=0.1),
             "inv-kin": StreamInfo(p_success=P_IK, cost=0.5),
-            "plan-base-motion": StreamInfo(deferrable=True, kind="function", p_success=0.99, cost=5),
+            "plan-base-motion": StreamInfo(
+                deferrable=True, kind="function", p_success=0.99, cost=5
+            ),
         },
         dict(values or {"p-d": OBJECT, "q0": Q0}),
     )
@@ -229,4 +231,6 @@ def make_episode(problem: str | None = None, seed: int = 0, *, noise: float = BA
     from ssr_compile.policy import Episode
 
     ex = load_example("progress")
-    return Episode(ProgressWorld(seed, noise), ProgressAgent(ex.domain, ex.streams, seed), "progress")
+    return Episode(
+        ProgressWorld(seed, noise), ProgressAgent(ex.domain, ex.streams, seed), "progress"
+    )

@@ -183,7 +183,6 @@ STREAM_INFO: dict[str, StreamInfo] = {
 }
 
 
-
 def make_module(seed: int = 0, problem: str | None = None) -> StreamsModule:
     """The streams with their samplers seeded by ``seed`` (``ssr-compile solve --seed N``).
     Every problem of the example uses the objects of :data:`VALUES`, so ``problem`` (the

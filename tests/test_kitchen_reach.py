@@ -3,6 +3,8 @@ where a noisy base motion lands, side grasps no base reaches, grasps reached at 
 believed pose tried first, and arm paths that start where the arm is although the object's
 estimate moved a little."""
 
+import itertools
+
 import numpy as np
 import pytest
 import ssr_compile.sim.samplers as samplers
@@ -256,3 +258,38 @@ def test_a_pre_grasp_inside_an_object_the_robot_put_down_is_refused(cook0):
     assert km.inv_kin("block", block, g, base) is None  # put down there by the robot
     km.settled = {"block"}  # the object reached for is no obstacle to its own grasp
     assert km.inv_kin("block", block, g, base) is not None
+
+
+def test_a_placement_the_world_refused_is_not_proposed_again(cook0):
+    # Cook seed 8 placed the block on the burner from one arm configuration 76 times: the same
+    # configuration lands it at the same pose, and the true world refused it each time.
+    from types import SimpleNamespace
+
+    from ssr_compile.belief.particles import PoseBelief
+    from ssr_compile.streams.kitchen_env import make_episode
+    from ssr_compile.streams.kitchen_module import REFUSED_NEAR, KitchenModule
+
+    w = cook0.world
+    km = KitchenModule(cook0, np.random.default_rng(7))
+    stove = [pb for (pb,) in (next(iter(km.sample_placement("block", "stove"))),)][0]
+    s, (x, y, z, yaw) = stove.point_estimate()
+    near = PoseBelief.point("block", stove.surfaces[0], (x + 0.01, y, z, yaw + 0.1))
+    far = PoseBelief.point("block", stove.surfaces[0], (x + 2 * REFUSED_NEAR[0], y, z, yaw))
+    assert not km.refused("block", near)
+    episode = make_episode("cook", 0)
+    try:
+        agent = episode.agent
+        agent.update(None, episode.environment.observe())
+        agent.km = km
+        step = SimpleNamespace(name="place", values=("block", stove))
+        agent._effects(step, SimpleNamespace(ok=False, held="block", stove_on=False))
+    finally:
+        episode.close()
+    assert km.failed_places == [("block", stove)]
+    assert km.refused("block", near) and not km.refused("block", far)
+    assert not km.refused(
+        "sugar_box", PoseBelief.point("sugar_box", stove.surfaces[0], (x, y, z, yaw))
+    )
+    # sample-placement does not yield it again: every draw is far from it or nothing
+    for out in itertools.islice(km.sample_placement("block", "stove"), 20):
+        assert out is None or not km.refused("block", out[0])
