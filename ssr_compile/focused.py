@@ -599,9 +599,11 @@ class _FocusedLoop:
         remaining = self.deadline - time.monotonic()
         bound = None if math.isinf(self.max_cost) else self.max_cost * compiled.scale
         result, size = self.call_planner(compiled, remaining, bound)
+        task = len(compiled.problem.objects) + len(compiled.domain.constants)
+        shared = f" ({task} in the planner's task)" if task < size[0] else ""
         self.say(
-            f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects, "
-            f"{size[1]} facts, {size[2]} values"
+            f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects"
+            f"{shared}, {size[1]} facts, {size[2]} values"
             + (f", {size[3]} ground actions" if size[3] is not None else "")
             + f"; planner {result.status} in {result.time:.3f} s"
         )
@@ -682,9 +684,7 @@ class _FocusedLoop:
             facts.update(r.certified)
         values = [v for v in self.problem.init if isinstance(v, S.InitValue)]
         values += [S.InitValue(t, S.Num(v)) for t, v in self.ev.real_functions.items()]
-        real = replace(
-            compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values)
-        )
+        real = replace(compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values))
         try:
             pre = plan_preimage(compiled.source_domain, real, bound)
             cost = plan_cost(compiled.source_domain, real, bound)
@@ -882,7 +882,9 @@ def _size(compiled, operators: int | None) -> tuple[int, int, int, int | None]:
     grounded = compiled.lowered.grounded if compiled.lowered is not None else None
     if operators is None and grounded is not None:
         operators = len(grounded.domain.actions)
-    objects = len(problem.objects) + len(compiled.source_domain.constants if compiled.source_domain else ())
+    objects = len(problem.objects) + len(
+        compiled.source_domain.constants if compiled.source_domain else ()
+    )
     return (objects, facts, len(problem.init) - facts, operators)
 
 

@@ -111,3 +111,15 @@ def test_real_results_keep_their_names():
     real = [replace(r, optimistic=False) for r in inst.results[:3]]
     again = share_leaves(c.source_domain, c.source_problem, s, replace(inst, results=real))
     assert not again.merged
+
+
+def test_verbose_solve_shows_the_planners_task_beside_the_optimistic_problem(capsys):
+    import re
+
+    from ssr_compile.cli import main
+
+    d, s, p = (str(PP / n) for n in ("domain.pddl", "stream.pddl", "problem.pddl"))
+    assert main(["solve", d, s, p, "--streams", str(PP / "streams.py"), "-v"]) == 0
+    out = capsys.readouterr()
+    sizes = re.findall(r"problem (\d+) objects \((\d+) in the planner's task\)", out.out + out.err)
+    assert sizes and all(int(task) < int(opt) for opt, task in sizes)
