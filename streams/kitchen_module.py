@@ -225,10 +225,11 @@ class KitchenModule:
             return (start, *path[1:])
         return None
 
-    def _place_obstacles(self, w, but: str | None = None) -> None:
-        """The objects the robot has localized, where it believes they are (``but`` one)."""
+    def _place_obstacles(self, w, but: str | None = None, among=None) -> None:
+        """The objects the robot has localized, where it believes they are (``but`` one; only
+        those ``among`` when given)."""
         for o, pb in sorted(self.obstacles.items()):
-            if o != but:
+            if o != but and (among is None or o in among):
                 p = self.obj_pose(pb)
                 w.place_object(o, p.surface, p.rel)
 
@@ -241,14 +242,11 @@ class KitchenModule:
             if res is not None and start is None and self.settled - {o}:
                 # A pre-grasp inside an object the robot has put down has no arm motion to it:
                 # Cook seed 1 placed both boxes beside the block, then drove to the same base
-                # 80 times (the motion, deferred, failed each time it came next).  Objects still
+                # some 80 times (the motion, deferred, failed each time it came next).  Objects still
                 # where they were found are not checked: plans often move them first (checked,
                 # the block's grasps behind the cracker box failed level after level, and Cook
                 # seed 2 spent 290 s on three replans).
-                for other in sorted(self.settled - {o}):
-                    if other in self.obstacles:
-                        q = self.obj_pose(self.obstacles[other])
-                        w.place_object(other, q.surface, q.rel)
+                self._place_obstacles(w, but=o, among=self.settled)
                 w.set_base(bq)
                 w.set_arm(res[0])
                 if w.robot_collision():
