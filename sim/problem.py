@@ -128,7 +128,9 @@ def to_canonical(pb: PoseBelief, drawers: dict[str, float]) -> PoseBelief:
 class KnownState:
     """What the robot knows for certain, and its beliefs (the input of :func:`state_problem`).
 
-    ``held``: ``(object, grasp value)`` or ``None``; ``beliefs``: canonical-frame pose beliefs
+    ``held``: ``(object, grasp value)`` or ``None`` (``held_name``: the name the plan that
+    picked it gave the grasp, kept so that a replan constrained to the plan's tail still
+    matches it; else ``g-<object>``); ``beliefs``: canonical-frame pose beliefs
     of the objects that are not held; ``cooked``: objects known to be cooked."""
 
     base: tuple[float, ...]
@@ -136,6 +138,7 @@ class KnownState:
     drawers: dict[str, float]
     beliefs: dict[str, PoseBelief]
     held: tuple[str, Any] | None = None
+    held_name: str | None = None
     stove_on: bool = False
     cooked: set[str] = field(default_factory=set)
     beliefon: dict[str, str] = field(default_factory=dict)  # prior: certainly on that surface
@@ -260,7 +263,7 @@ def state_problem(
         if o in known.cooked:
             init.append(_atom("cooked", o))
         if known.held is not None and known.held[0] == o:
-            g = obj(f"g-{o}", known.held[1])
+            g = obj(known.held_name or f"g-{o}", known.held[1])
             init += [_atom("grasp", o, g), _atom("atgrasp", o, g)]
             continue
         belief = known.beliefs[o]

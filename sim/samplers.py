@@ -81,6 +81,23 @@ LEAD_STEP = 0.05  # radians between the lead-in's configurations
 # (m, rad): a sampled base must be collision-free this far off along x, y and yaw (about two
 # standard deviations of a base motion's landing error).
 BASE_MARGIN = (0.02, 0.03)
+# (m, rad): a base ``inv-reach`` returns reaches its grasp from the four corners this far off
+# along x, y and yaw too (1.5 standard deviations of a landing error).  Without it, Stow seed 0
+# drove to eight bases in a row: each time the robot landed, the grasp was out of the arm's
+# reach from where it stood (1 in 5 of the bases sampled there fail at one corner).
+LANDING = (0.015, 0.015)
+# (m, rad): an IK solution found at a base this near seeds the IK at another (the pre-grasp
+# the landed robot solves for is almost the one it drove there for).
+HINT_NEAR = (0.05, 0.1)
+HINTS_KEPT = 64  # IK solutions kept per (object, grasp)
+
+
+def _landings(base: Conf) -> list[Conf]:
+    """Four corners :data:`LANDING` off ``base`` (x, y and yaw perturbed together)."""
+    dxy, dyaw = LANDING
+    corners = ((1, 1, 1), (-1, -1, -1), (1, -1, -1), (-1, 1, 1))
+    x, y, yaw = base
+    return [(x + a * dxy, y + b * dxy, yaw + c * dyaw) for a, b, c in corners]
 
 
 def _lead_in(start: Conf, path: list[Conf]) -> list[Conf]:
@@ -113,6 +130,9 @@ class KitchenStreams:
         self.max_attempts = max_attempts
         self.rrt_iterations = rrt_iterations
         self._kin_cache: dict = {}
+        # (object, grasp) -> [(base, goal arm conf)]: IK solutions found, hints for nearby bases
+        self._solutions: dict[tuple[str, Grasp], list[tuple[Conf, Conf]]] = {}
+        self._drawer_bases: dict[str, list[Conf]] = {}  # bases sample_drawer_base found
 
     # -- poses -----------------------------------------------------------------------------
     def world_pose(self, p: ObjPose) -> Pose:
@@ -231,9 +251,12 @@ class KitchenStreams:
         steps: int = 5,
         ignore_hand=(),
         seed: Conf | None = None,
+        hint: Conf | None = None,
     ) -> list[Conf] | None:
         """Arm path from the pre-pose (``back`` along the tool's -z) to ``tool`` (in the world
-        state as it is), collision-checked; the hand may touch ``ignore_hand`` at the end."""
+        state as it is), collision-checked; the hand may touch ``ignore_hand`` at the end.
+        ``seed``: the arm is there (the path starts from it); else ``hint``: a configuration
+        near the goal's to start the IK from (then random restarts)."""
         w = self.world
         poses = [multiply(tool, pose((0, 0, -back * (1 - k / steps)))) for k in range(steps + 1)]
         path = None
@@ -243,8 +266,9 @@ class KitchenStreams:
             # goal-first, the redundant arm's path often starts in another posture.)
             path = self.cartesian_path(base, poses, seed)
         if path is None:
-            # Solve the goal first (many restarts), then walk back to the pre-pose from it.
-            rev = self.cartesian_path(base, poses[::-1], seed)
+            # Solve the goal first (from ``seed`` or ``hint``, then random restarts), then walk
+            # back to the pre-pose from it.
+            rev = self.cartesian_path(base, poses[::-1], hint if seed is None else seed)
             if rev is None:
                 return None
             path = rev[::-1]
@@ -279,10 +303,32 @@ class KitchenStreams:
             tool = multiply(self.world_pose(p), invert(g.pose))
             if holding:
                 w.held.grasp = g.pose
-            path = self.approach_path(base, tool, ignore_hand=() if holding else (obj,), seed=seed)
+            hint = None if seed is not None else self._hint(obj, g, base)
+            path = self.approach_path(
+                base, tool, ignore_hand=() if holding else (obj,), seed=seed, hint=hint
+            )
+        if path is not None:
+            found = self._solutions.setdefault((obj, g), [])
+            found.append((tuple(base), tuple(path[-1])))
+            del found[:-HINTS_KEPT]
         out = None if path is None else (path[0], tuple(path))
         self._kin_cache[key] = out
         return out
+
+    def _hint(self, obj: str, g: Grasp, base: Conf) -> Conf | None:
+        """The goal configuration of the latest IK solution for ``obj`` and ``g`` found from a
+        base within :data:`HINT_NEAR` of ``base``, if any."""
+        dxy, dyaw = HINT_NEAR
+        for b, q in reversed(self._solutions.get((obj, g), ())):
+            yaw_gap = abs((b[2] - base[2] + np.pi) % (2 * np.pi) - np.pi)
+            if abs(b[0] - base[0]) <= dxy and abs(b[1] - base[1]) <= dxy and yaw_gap <= dyaw:
+                return q
+        return None
+
+    def lands(self, obj: str, p: ObjPose, g: Grasp, base: Conf) -> bool:
+        """``inv-kin`` also succeeds from the corners :data:`LANDING` off ``base``: where a
+        base motion to ``base`` lands, the robot most likely reaches the grasp from there."""
+        return all(self.inv_kin(obj, p, g, b) is not None for b in _landings(base))
 
     def _sample_base_near(self, target_xy, r_range=(0.3, 0.75)) -> Conf | None:
         psi = self.rng.uniform(-np.pi / 3, np.pi / 3)
@@ -316,7 +362,8 @@ class KitchenStreams:
             return True
 
     def inv_reach(self, obj: str, p: ObjPose, g: Grasp) -> Iterator[tuple[Conf]]:
-        """Generator stream ``inv-reach``: base confs from which ``inv-kin`` succeeds."""
+        """Generator stream ``inv-reach``: base confs from which ``inv-kin`` succeeds, and from
+        near which it does too (:meth:`lands`)."""
         target, q = multiply(self.world_pose(p), invert(g.pose))
         approach = rotate(q, (0.0, 0.0, 1.0))  # the tool's z: the way the hand moves in
         if np.hypot(approach[0], approach[1]) > 0.7:  # a side grasp
@@ -330,7 +377,7 @@ class KitchenStreams:
             if base is None or not self.base_free(base):
                 continue
             tried += 1
-            if self.inv_kin(obj, p, g, base) is not None:
+            if self.inv_kin(obj, p, g, base) is not None and self.lands(obj, p, g, base):
                 yield (base,)
 
     # -- motions ---------------------------------------------------------------------------
@@ -398,13 +445,29 @@ class KitchenStreams:
 
     def sample_drawer_base(self, drawer: str) -> Iterator[tuple[Conf]]:
         """Generator stream: base confs from which the handle is reachable over the whole
-        travel of ``drawer`` (checked at both ends)."""
-        for _ in range(self.max_attempts):
+        travel of ``drawer`` (checked at both ends), from near which it is too (the corners
+        :data:`LANDING` off, as :meth:`lands`: the scripted Swap once landed 6 mm and 9 mrad
+        off a base and found no push from there)."""
+
+        def robust(base: Conf) -> bool:
+            return all(
+                self.plan_drawer(drawer, 0.0, DRAWER_TRAVEL, b) is not None
+                for b in (base, *_landings(base))
+            )
+
+        # Bases that served before first (the handle's path is the same whatever the opening):
+        # 1 in 20 sampled bases reaches the bottom drawer's low handle, fewer from near as well.
+        found = self._drawer_bases.setdefault(drawer, [])
+        for base in list(found):
+            if self.base_free(base) and robust(base):
+                yield (base,)
+        for _ in range(2 * self.max_attempts):
             target = self.handle_tool(drawer, DRAWER_TRAVEL)[0]
-            base = self._sample_base_near(target, (0.3, 0.5))
-            if base is None or not self.base_free(base):
+            base = self._sample_base_near(target, (0.3, 0.55))
+            if base is None or base in found or not self.base_free(base):
                 continue
-            if self.plan_drawer(drawer, 0.0, DRAWER_TRAVEL, base) is not None:
+            if robust(base):
+                found.append(base)
                 yield (base,)
 
     def plan_drawer(

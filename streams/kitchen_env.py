@@ -264,6 +264,10 @@ class KitchenAgent:
         if step.name == "pick" and obs.held == step.values[0]:
             o, g = step.values[0], step.values[2]
             k.held = (o, g)
+            # The grasp keeps the plan's name: the rest of the plan places ``o`` with it, and
+            # the next replan, constrained to that tail, held after no pick (Stow seed 0 fell
+            # back after each one, and picked and placed the block again four times).
+            k.held_name = step.args[2]
             k.beliefs.pop(o, None)
             self.placed.discard(o)
         elif step.name == "pick" and not obs.ok and step.values[0] in k.beliefs:
@@ -274,13 +278,14 @@ class KitchenAgent:
             self.km.failed_places.append((step.values[0], step.values[1]))
         elif step.name == "place" and obs.held is None and k.held is not None:
             o, pb = step.values[0], step.values[1]
-            k.held = None
+            k.held, k.held_name = None, None
             k.beliefs[o] = self._placed(o, pb)
             self.placed.add(o)
             if obs.stove_on and pb.most_likely_surface() == "stove":
                 k.cooked.add(o)
         if obs.held is None and k.held is not None and step.name != "place":
-            k.held = None  # dropped (never expected): the object is lost to the belief
+            # dropped (never expected): the object is lost to the belief
+            k.held, k.held_name = None, None
 
     def _arrange(self) -> None:
         """The planning world as the robot knows it: its configuration, the drawers, localized

@@ -91,3 +91,33 @@ def test_drawer_beliefs_move_with_the_drawer():
         assert not is_localized(pb)
     finally:
         task.close()
+
+
+def test_the_held_grasp_keeps_the_name_of_the_plan_that_picked_it():
+    # After a pick, the rest of the plan places the object with the grasp the pick used; the
+    # state's problem named it g-<object>, so the replan constrained to that tail never held
+    # after a pick (Stow seed 0 fell back and picked and placed the block four times).
+    from types import SimpleNamespace
+
+    from ssr_compile.streams.kitchen_env import make_episode
+
+    episode = make_episode("stow", 0)
+    try:
+        agent = episode.agent
+        agent.update(None, episode.environment.observe())
+        grasp = ("a grasp value",)
+        pb = agent.known.beliefs["block"]
+        step = SimpleNamespace(
+            name="pick", args=("block", "pb-block", "g-52", "bq0", "aq0", "t-1"),
+            values=("block", pb, grasp, None, None, None),
+        )  # fmt: skip
+        agent._effects(step, SimpleNamespace(ok=True, held="block", stove_on=False))
+        problem, values = state_problem(agent.task, agent.known)
+        f = facts(problem)
+        assert ("atgrasp", "block", "g-52") in f and values["g-52"] == grasp
+        assert not any(x[0] == "atgrasp" and x[2] == "g-block" for x in f)
+        place = SimpleNamespace(name="place", args=("block", "pb-1", "g-52"), values=("block", pb))
+        agent._effects(place, SimpleNamespace(ok=True, held=None, stove_on=False))
+        assert agent.known.held is None and agent.known.held_name is None
+    finally:
+        episode.close()
