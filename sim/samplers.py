@@ -391,13 +391,16 @@ class KitchenStreams:
         w.robot.set_base(base)
         return collision
 
-    def plan_arm_motion(self, base: Conf, q1: Conf, q2: Conf) -> tuple[tuple[Conf, ...]] | None:
+    def plan_arm_motion(
+        self, base: Conf, q1: Conf, q2: Conf, blocked: Callable[[np.ndarray], bool] | None = None
+    ) -> tuple[tuple[Conf, ...]] | None:
         """Function stream ``motion`` (arm): an RRT-Connect path ``q1 -> q2`` at ``base``,
         collision-free against the world, open drawers and the held object.  When ``q1`` itself
         collides (the arm stopped where the world as estimated puts an object it did not
         touch), the path may leave it: configurations within :data:`ESCAPE` of ``q1`` are not
         checked -- else no motion ever starts there, and a replan has no way out (Cook seed 3:
-        "no relaxed solution" after an arm motion stopped short of the block)."""
+        "no relaxed solution" after an arm motion stopped short of the block).  ``blocked``:
+        configurations to treat as colliding besides (what the true world refused)."""
         w = self.world
         r = w.robot
         with w.saved():
@@ -407,6 +410,8 @@ class KitchenStreams:
             escape = check(start)
 
             def collision(q: np.ndarray) -> bool:
+                if blocked is not None and blocked(np.asarray(q, float)):
+                    return True
                 if escape and float(np.max(np.abs(np.asarray(q, float) - start))) <= ESCAPE:
                     return False
                 return check(q)

@@ -220,10 +220,13 @@ class KitchenAgent:
             self._start(obs)
         k = self.known
         assert k is not None
+        arm_before = k.arm
         k.base, k.arm, k.drawers = tuple(obs.base), tuple(obs.arm), dict(obs.drawers)
         k.stove_on = obs.stove_on
         if step is not None:
             self._effects(step, obs)
+            if step.name == "move-arm" and not obs.ok:
+                self._collided(step, arm_before, obs)
         if k.stove_on:  # what is on the burner while it is on is cooked
             for o, pb in k.beliefs.items():
                 if pb.prob_surface("stove") >= 0.95:
@@ -286,6 +289,19 @@ class KitchenAgent:
         if obs.held is None and k.held is not None and step.name != "place":
             # dropped (never expected): the object is lost to the belief
             k.held, k.held_name = None, None
+
+    def _collided(self, step: Step, arm_before, obs: KitchenObservation) -> None:
+        """An arm motion the true world stopped: the configuration after the one where the arm
+        stopped (as the robot executed the path) collided; arm motions at this base avoid it
+        from now on (:meth:`KitchenModule.blocked`)."""
+        action = to_action(step.name, step.values, arm_before)
+        path = np.asarray(action.path, float)
+        if len(path) < 2:
+            return
+        stop = np.asarray(obs.arm, float)
+        i = int(np.argmin(np.max(np.abs(path - stop), axis=1)))
+        hit = path[min(i + 1, len(path) - 1)]
+        self.km.collided.append((tuple(obs.base), tuple(obs.arm), tuple(float(v) for v in hit)))
 
     def _arrange(self) -> None:
         """The planning world as the robot knows it: its configuration, the drawers, localized

@@ -49,6 +49,11 @@ MODEL, EPS, DELTA = BELIEF.model, BELIEF.eps, BELIEF.delta
 C_DETECT, C_RECOVER = BELIEF.c_detect, BELIEF.c_recover  # c: one detection; c': a failed one
 # A placement this close (m, rad) to one the true world refused is not proposed again.
 REFUSED_NEAR = (0.02, 0.2)
+# Radians (max over the joints) around an arm configuration that collided in the true world
+# within which arm motions at that base are refused (:meth:`KitchenModule.blocked`).
+BLOCKED = 0.3
+# (m, rad): bases this close share what the true world refused there.
+SAME_BASE = (0.03, 0.05)
 RETRIES = 3  # random IK restarts may miss: a function stream tries this often before failing
 MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
 FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
@@ -99,6 +104,9 @@ class KitchenModule:
         self.settled: set[str] = set()
         # placements the true world refused (object, point belief), recorded by the agent
         self.failed_places: list[tuple[str, PoseBelief]] = []
+        # arm motions the true world stopped: (base, where the arm stopped, the configuration
+        # that collided), recorded by the agent (see :meth:`blocked`)
+        self.collided: list[tuple[tuple, tuple, tuple]] = []
         # what the robot holds now (object, grasp) and its arm configuration (the same)
         self.holding: tuple[str, Grasp] | None = None
         self.arm_now: tuple[float, ...] | None = None
@@ -361,15 +369,40 @@ class KitchenModule:
             # RRT-Connect may miss a path that exists; a function fails for the whole solve,
             # and with the arm where it is, no other motion may be left (Cook seed 3 ended
             # "no relaxed solution" on one miss, with a path there on the next try).
+            blocked = self.blocked(bq)
             for _ in range(RETRIES):
                 if reverse:
-                    out = self.ks.plan_arm_motion(bq, q2, q1)
+                    out = self.ks.plan_arm_motion(bq, q2, q1, blocked)
                     path = None if out is None else (tuple(out[0][::-1]),)
                 else:
-                    path = self.ks.plan_arm_motion(bq, q1, q2)
+                    path = self.ks.plan_arm_motion(bq, q1, q2, blocked)
                 if path is not None:
                     return path
             return None
+
+    def blocked(self, bq):
+        """Configurations the true world refused at (or near) base ``bq``, as a test for arm
+        motions: within :data:`BLOCKED` of a configuration that collided, on its side of the
+        halfway point from where the arm stopped (the arm may still leave that point).  The
+        planning world did not know what the arm hit -- an estimate a little off, or an object
+        not yet localized -- and the motion stream, asked again, planned through it again
+        (Cook seed 5 executed one carry motion 90 times)."""
+        near = [
+            (np.asarray(stop, float), np.asarray(hit, float))
+            for b, stop, hit in self.collided
+            if _near_base(b, bq)
+        ]
+        if not near:
+            return None
+
+        def test(q: np.ndarray) -> bool:
+            for stop, hit in near:
+                to_hit = float(np.max(np.abs(q - hit)))
+                if to_hit <= BLOCKED and to_hit <= float(np.max(np.abs(q - stop))):
+                    return True
+            return False
+
+        return test
 
     def sample_drawer_base(self, d: str):
         return self._each(lambda: self.ks.sample_drawer_base(d), moving=d)
@@ -569,6 +602,15 @@ def make_module(task: Task, rng: np.random.Generator, values: dict | None = None
     )
     module.module = km
     return module
+
+
+def _near_base(a, b) -> bool:
+    yaw = abs((float(a[2]) - float(b[2]) + math.pi) % (2 * math.pi) - math.pi)
+    return (
+        abs(a[0] - b[0]) <= SAME_BASE[0]
+        and abs(a[1] - b[1]) <= SAME_BASE[0]
+        and (yaw <= SAME_BASE[1])
+    )
 
 
 def to_action(name: str, values: tuple, arm_now=None) -> Action | None:

@@ -198,7 +198,7 @@ def test_arm_motions_avoid_the_objects_the_robot_has_localized():
         assert set(km.obstacles) == {"block", "sugar_box"}
         seen = {}
 
-        def record(bq, q1, q2):
+        def record(bq, q1, q2, blocked=None):
             w = km.world
             seen["present"] = sorted(w.present())
             seen["at"] = {o: w.object_pose(o)[0] for o in w.present()}

@@ -172,7 +172,7 @@ def test_the_next_arm_motion_carries_what_the_robot_holds(cook0):
     grasp = km.ks.grasps("cracker_box")[0]
     seen, asked = [], []
 
-    def record(base, q1, q2):
+    def record(base, q1, q2, blocked=None):
         w = km.world
         seen.append(None if w.held is None else (w.held.obj, w.held.grasp))
         asked.append((q1, q2))
@@ -340,3 +340,43 @@ def test_drawer_bases_reach_the_handle_from_near_too_and_are_reused():
         assert next(iter(ks.sample_drawer_base("bottom_drawer")))[0] == first
     finally:
         task.close()
+
+
+def test_an_arm_motion_the_world_stopped_is_not_planned_again():
+    # Cook seed 5 executed one carry motion 90 times: the true world stopped the arm at the
+    # same waypoint each time (the planning world did not know what it hit), and the motion
+    # stream, asked again from where the arm stood, planned through it again.
+    from types import SimpleNamespace
+
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.streams.kitchen_env import make_episode
+    from ssr_compile.streams.kitchen_module import BLOCKED
+
+    episode = make_episode("cook", 0)
+    try:
+        agent, env = episode.agent, episode.environment
+        agent.update(None, env.observe())
+        km = agent.km
+        base = agent.known.base
+        tuck, carry = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
+        path = tuple(tuple(tuck + (carry - tuck) * k / 10) for k in range(11))
+        assert km.plan_arm_motion(base, path[3], path[-1]) is not None
+        assert km.blocked(base) is None  # nothing refused yet
+        # the world stopped the arm at waypoint 3 of the path: waypoint 4 collided
+        step = SimpleNamespace(name="move-arm", args=("bq0", "aq0", "t-1", "aq-carry"),
+                               values=(base, path[0], path, path[-1]))  # fmt: skip
+        obs = SimpleNamespace(ok=False, arm=path[3], base=base, held=None, stove_on=False)
+        agent._collided(step, path[0], obs)
+        ((b, stop, hit),) = km.collided
+        assert np.allclose(stop, path[3]) and np.allclose(hit, path[4])
+        test = km.blocked(base)
+        assert test(np.asarray(path[4])) and test(np.asarray(path[5]))
+        assert not test(np.asarray(path[3]))  # the arm can leave where it stopped
+        assert km.blocked((base[0] + 0.2, base[1], base[2])) is None  # another base
+        (motion,) = km.plan_arm_motion(base, path[3], path[-1])
+        for q in motion:
+            q = np.asarray(q)
+            d_hit = np.max(np.abs(q - path[4]))
+            assert not (d_hit <= BLOCKED and d_hit <= np.max(np.abs(q - np.asarray(path[3]))))
+    finally:
+        episode.close()
