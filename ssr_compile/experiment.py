@@ -905,6 +905,9 @@ def run_sweep(
 
         try:
             if todo:
+                # The commit of the code the episodes run: read now, as the fork server loads
+                # it (read at the first record, it named a commit made while the sweep ran).
+                provenance()
                 warm_fork_server(s.task for s in todo)
                 executor.run(todo, str(out / "logs") if keep_logs else None, on_result)
         finally:
