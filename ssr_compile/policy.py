@@ -196,6 +196,7 @@ class Cycle:
     comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
     plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
     observation: str | None = None  # what the environment answered (``str`` of its observation)
+    failed: bool = False  # the environment reported the execution failed (its ``ok`` false)
 
     def as_dict(self) -> dict:
         d = dict(vars(self))
@@ -212,6 +213,7 @@ class Cycle:
             f"plan {self.plan_length if self.plan_length is not None else '-'} (cost {cost})  "
             f"planning {self.planning_time:7.3f} s  streams {self.stream_calls:3d}  "
             f"deferred {self.deferred:2d}  | {self.belief}"
+            + (f"  | {self.observation}" if self.failed and self.observation else "")
         )
 
 
@@ -504,6 +506,7 @@ def run_policy(
                 update_time=after_update - after_exec,
                 comparison_time=comparison,
                 observation=None if observation is None else str(observation),
+                failed=getattr(observation, "ok", True) is False,
             )
     except StreamOverrun as e:
         planning += e.seconds

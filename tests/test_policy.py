@@ -281,3 +281,15 @@ def test_an_unconstrained_attempt_climbs_past_the_constrained_attempts_last_leve
     episode, result = _progress(0, "both", max_level=1)
     assert result.success, result.reason
     assert PolicySettings().unconstrained_max_level > PolicySettings().max_level
+
+
+def test_a_cycle_line_says_what_the_environment_answered_when_the_execution_failed():
+    # A sweep's episode logs are its cycle lines: a Cook episode that failed the same motion
+    # seven times said nothing of what the world answered.
+    from ssr_compile.policy import Cycle
+
+    kw = dict(index=3, action="(move-arm bq0 aq0 t-1 aq-carry)", constrained="held",
+              planning_time=1.0, stream_calls=2, planner_calls=1, deferred=0, plan_length=4,
+              cost=4.0, belief="holding box", observation="FAILED: arm motion collides with counter")  # fmt: skip
+    assert Cycle(**kw, failed=True).line().endswith("| FAILED: arm motion collides with counter")
+    assert "collides" not in Cycle(**kw).line()  # an execution that went well: no echo
