@@ -113,5 +113,16 @@ def wrap_angle(a: float) -> float:
     return float((a + np.pi) % (2 * np.pi) - np.pi)
 
 
+def bases_near(a, b, tol: tuple[float, float]) -> bool:
+    """Base configurations ``(x, y, yaw)`` within ``tol = (metres, radians)`` of each other
+    along each axis (yaw wrapped)."""
+    dxy, dyaw = tol
+    return (
+        abs(a[0] - b[0]) <= dxy
+        and abs(a[1] - b[1]) <= dxy
+        and abs(wrap_angle(float(a[2]) - float(b[2]))) <= dyaw
+    )
+
+
 def pose2d(x: float, y: float, z: float, yaw: float) -> Pose:
     return pose((x, y, z), quat_from_yaw(yaw))

@@ -20,6 +20,7 @@ import numpy as np
 from .actions import DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from .geometry import (
     Pose,
+    bases_near,
     invert,
     matrix_to_quat,
     multiply,
@@ -318,10 +319,8 @@ class KitchenStreams:
     def _hint(self, obj: str, g: Grasp, base: Conf) -> Conf | None:
         """The goal configuration of the latest IK solution for ``obj`` and ``g`` found from a
         base within :data:`HINT_NEAR` of ``base``, if any."""
-        dxy, dyaw = HINT_NEAR
         for b, q in reversed(self._solutions.get((obj, g), ())):
-            yaw_gap = abs((b[2] - base[2] + np.pi) % (2 * np.pi) - np.pi)
-            if abs(b[0] - base[0]) <= dxy and abs(b[1] - base[1]) <= dxy and yaw_gap <= dyaw:
+            if bases_near(b, base, HINT_NEAR):
                 return q
         return None
 

@@ -25,7 +25,14 @@ from contextlib import contextmanager
 
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
-from ssr_compile.sim.geometry import invert, multiply, pose, quat_from_yaw
+from ssr_compile.sim.geometry import (
+    bases_near,
+    invert,
+    multiply,
+    pose,
+    quat_from_yaw,
+    wrap_angle,
+)
 from ssr_compile.sim.problem import canonical_surface, is_localized
 from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
 from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
@@ -340,8 +347,7 @@ class KitchenModule:
                 continue
             s2, est2 = failed.point_estimate()
             if s2 == s and float(np.hypot(*(est[:2] - est2[:2]))) < REFUSED_NEAR[0]:
-                dyaw = abs((est[3] - est2[3] + math.pi) % (2 * math.pi) - math.pi)
-                if dyaw < REFUSED_NEAR[1]:
+                if abs(wrap_angle(float(est[3] - est2[3]))) < REFUSED_NEAR[1]:
                     return True
         return False
 
@@ -390,7 +396,7 @@ class KitchenModule:
         near = [
             (np.asarray(stop, float), np.asarray(hit, float))
             for b, stop, hit in self.collided
-            if _near_base(b, bq)
+            if bases_near(b, bq, SAME_BASE)
         ]
         if not near:
             return None
@@ -602,15 +608,6 @@ def make_module(task: Task, rng: np.random.Generator, values: dict | None = None
     )
     module.module = km
     return module
-
-
-def _near_base(a, b) -> bool:
-    yaw = abs((float(a[2]) - float(b[2]) + math.pi) % (2 * math.pi) - math.pi)
-    return (
-        abs(a[0] - b[0]) <= SAME_BASE[0]
-        and abs(a[1] - b[1]) <= SAME_BASE[0]
-        and (yaw <= SAME_BASE[1])
-    )
 
 
 def to_action(name: str, values: tuple, arm_now=None) -> Action | None:
