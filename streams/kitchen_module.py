@@ -89,6 +89,10 @@ class ArmConf(tuple):
         return id(self)
 
 
+def _conf_key(q) -> tuple:
+    return tuple(np.round(np.asarray(q, float), 6))
+
+
 def _same(q1, q2, tol: float = 1e-6) -> bool:
     return len(q1) == len(q2) and float(np.max(np.abs(np.subtract(q1, q2)))) <= tol
 
@@ -121,6 +125,9 @@ class KitchenModule:
         # moved to for one of them takes it again: solved anew from there, the redundant arm's
         # IK may not find a path that starts there, and the robot went back and forth)
         self._drawer_motions: list = []
+        # the drawer openings each reach configuration was computed under (see
+        # :meth:`_openings_at`), by its joint values
+        self._reach_openings: dict[tuple, dict[str, float]] = {}
 
     # -- planning state -------------------------------------------------------------------
     def _canonical_frame(self, surface: str):
@@ -254,6 +261,8 @@ class KitchenModule:
             if not self._reachable(bq, self.ks.world_pose(p)[0]):
                 return None
             res = self.ks.inv_kin(o, p, g, bq, seed=start)
+            if res is not None and self._drawer_of(pb) is not None:
+                self._note_reach(res[0], w.drawer_q)
             if res is not None and start is None and self.settled - {o}:
                 # A pre-grasp inside an object the robot has put down has no arm motion to it:
                 # Cook seed 1 placed both boxes beside the block, then drove to the same base
@@ -355,11 +364,34 @@ class KitchenModule:
         with self.planning():
             return self.ks.plan_base_motion(q1, q2)
 
+    def _note_reach(self, q, openings) -> None:
+        self._reach_openings[_conf_key(q)] = dict(openings)
+
+    def _openings_at(self, q1, q2) -> dict[str, float] | None:
+        """The drawer openings while the arm moves between ``q1`` and ``q2``: those the reach
+        end was computed under -- a pull's approach with its drawer closed and the others
+        closed, as pull requires; a pick in a drawer with that drawer open.  No drawer moves
+        during an arm motion, so they hold for the whole motion, whenever the plan takes it.
+        ``None`` (the openings the robot saw) for a reach the streams did not compute (the arm
+        where it stopped) or one any openings allow (a pick on the counter)."""
+        for q in (q2, q1):
+            found = self._reach_openings.get(_conf_key(q))
+            if found is not None:
+                return found
+        return None
+
     def plan_arm_motion(self, bq, q1, q2):
         """An arm motion that also avoids the objects the robot has localized where it believes
         they are (:attr:`obstacles`): the arm leaving an object it just placed must not sweep
-        through it, which the true world refuses (and a replan would try the same path again)."""
+        through it, which the true world refuses (and a replan would try the same path again).
+        Drawers are where they will be when the motion is taken (:meth:`_openings_at`), not
+        where the robot saw them: Swap without deferral opened the bottom drawer, and every
+        motion towards the top drawer's handle, checked against the bottom drawer open, failed
+        level after level until the instance cap."""
+        openings = self._openings_at(q1, q2)
         with self.planning() as w:
+            for d, q in (openings or {}).items():
+                w.set_drawer(d, q)
             self._place_obstacles(w)
             # A motion is certified both ways (see :func:`to_action`), so one that ends where
             # the arm is now may be executed next, reversed: it is planned from here.
@@ -428,6 +460,8 @@ class KitchenModule:
                 m = self.ks.plan_drawer(d, a1[1], a2[1], bq, seed=start)
                 path = self._snap(None if m is None else m.arm_path, start)
                 if path is not None:
+                    self._note_reach(path[0], {**self.world.drawer_q, d: a1[1]})
+                    self._note_reach(path[-1], {**self.world.drawer_q, d: a2[1]})
                     motion = DrawerMotion(d, tuple(path), m.drawer_path)
                     self._drawer_motions.append((key, motion))
                     return motion

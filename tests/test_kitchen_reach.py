@@ -380,3 +380,44 @@ def test_an_arm_motion_the_world_stopped_is_not_planned_again():
             assert not (d_hit <= BLOCKED and d_hit <= np.max(np.abs(q - np.asarray(path[3]))))
     finally:
         episode.close()
+
+
+def test_an_arm_motion_is_checked_with_the_drawers_where_the_plan_has_them():
+    # Swap without deferral opened the bottom drawer, saw nothing, and then could not plan
+    # to pull it open again later (after closing it to open the top one): every motion to the
+    # pull's approach at the closed handle was checked against the drawer open, where the
+    # hand is inside it, and failed level after level until the instance cap.  The motion is
+    # checked with the drawers as its reach end was computed (the approach: drawer closed).
+    from ssr_compile.sim.robot import ARM_TUCK
+    from ssr_compile.sim.world import DRAWER_TRAVEL
+    from ssr_compile.streams.kitchen_module import KitchenModule
+
+    task = make_task("swap", 0)
+    try:
+        km = KitchenModule(task, np.random.default_rng(0))
+        task.world.set_drawer("bottom_drawer", DRAWER_TRAVEL)
+        km.drawers["bottom_drawer"] = DRAWER_TRAVEL  # what the robot saw: the bottom one open
+        closed, opened = ("bottom_drawer-closed", 0.0), ("bottom_drawer-open", DRAWER_TRAVEL)
+        tried = 0
+        for draw in itertools.islice(km.sample_drawer_base("bottom_drawer"), 20):
+            if draw is None:
+                continue
+            (bq,) = draw
+            pull = km._plan_drawer("bottom_drawer", closed, opened, bq)
+            if pull is None:
+                continue
+            aq1, aq2, _ = pull
+            # the approach has both drawers closed, the pull's end the bottom one open
+            assert km._openings_at(ARM_TUCK, aq1) == {"top_drawer": 0.0, "bottom_drawer": 0.0}
+            assert km._openings_at(aq2, ARM_TUCK)["bottom_drawer"] == DRAWER_TRAVEL
+            assert km.plan_arm_motion(bq, ARM_TUCK, aq1) is not None
+            saved = dict(km._reach_openings)
+            km._reach_openings.clear()  # as before: the drawers where the robot saw them
+            assert km.plan_arm_motion(bq, ARM_TUCK, aq1) is None  # the hand in the open drawer
+            km._reach_openings.update(saved)
+            tried += 1
+            if tried == 2:
+                break
+        assert tried == 2
+    finally:
+        task.close()
