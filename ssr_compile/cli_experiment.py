@@ -212,15 +212,39 @@ def _command_args(args, tasks, variants) -> list[str]:
 def _configure_report(p: argparse.ArgumentParser) -> None:
     p.description = (
         "Rebuild DIR/table.md and DIR/table1.png from DIR/episodes.jsonl alone (the JSON lines "
-        "of `ssr-compile experiment`), and print the table."
+        "of `ssr-compile experiment`), and print the table.  With several DIRs and -o OUT: "
+        "one table of all their episodes (a task, variant and seed run in more than one: the "
+        "last DIR's), written to OUT with the merged episodes.jsonl."
     )
-    p.add_argument("dir", metavar="DIR", help="a sweep's folder")
+    p.add_argument("dirs", nargs="+", metavar="DIR", help="a sweep's folder")
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="OUT",
+        help="write the table (and, for several DIRs, their merged episodes) here instead",
+    )
 
 
 def run_report(args: argparse.Namespace) -> int:
     from .experiment import write_report
 
-    table, plot, text = write_report(args.dir)
+    if len(args.dirs) > 1 and args.output is None:
+        print(
+            "ssr-compile report: error: several sweep folders need -o OUT, the folder of "
+            "their merged table",
+            file=sys.stderr,
+        )
+        return 2
+    from pathlib import Path
+
+    alone = len(args.dirs) == 1 and (
+        args.output is None or Path(args.output).resolve() == Path(args.dirs[0]).resolve()
+    )
+    if alone:
+        table, plot, text = write_report(args.dirs[0])
+    else:
+        command = " ".join(["ssr-compile report", *args.dirs, "-o", args.output])
+        table, plot, text = write_report(args.output, command, sources=args.dirs)
     print(text)
     print(f"wrote {table} and {plot}", file=sys.stderr)
     return 0

@@ -1066,6 +1066,7 @@ def render_table(records: Iterable[dict], command: str | None = None) -> str:
                 prow += [f"{p[0]:g}", f"{p[1]:g}"] if p else ["–", "–"]
             lines.append("| " + " | ".join(prow) + " |")
     recs = list(latest(records).values())
+    lines += ["", *render_details(recs)]
     lost = [r for r in recs if r.get("status") not in (FINISHED, None)]
     lines += ["", f"{len(recs)} episodes, {sum(bool(r.get('success')) for r in recs)} successes."]
     if lost:
@@ -1093,6 +1094,76 @@ def render_table(records: Iterable[dict], command: str | None = None) -> str:
     if command:
         lines += ["", "Command:", "", "```bash", command, "```"]
     return "\n".join(lines) + "\n"
+
+
+def _median(values: list[float]) -> float | None:
+    if not values:
+        return None
+    v = sorted(values)
+    n = len(v)
+    return v[n // 2] if n % 2 else (v[n // 2 - 1] + v[n // 2]) / 2
+
+
+def _seed_list(seeds: Iterable[int]) -> str:
+    """``0-4,7``: sorted seeds with runs folded."""
+    out: list[str] = []
+    run: list[int] = []
+    for s in sorted(set(seeds)):
+        if run and s == run[-1] + 1:
+            run.append(s)
+            continue
+        if run:
+            out.append(f"{run[0]}-{run[-1]}" if len(run) > 1 else str(run[0]))
+        run = [s]
+    if run:
+        out.append(f"{run[0]}-{run[-1]}" if len(run) > 1 else str(run[0]))
+    return ",".join(out) or "–"
+
+
+def render_details(recs: list[dict]) -> list[str]:
+    """Per task × variant, what Table I does not show: the seeds run and those that failed,
+    the median planning time of the successes, the mean cycles, the constrained attempts
+    (Algorithm 2) that held and those that fell back to an unconstrained replan (totals over
+    the cell's episodes), and the commits the episodes ran at."""
+    tasks, variants, _ = cells(recs)
+    lines = [
+        "Per cell: seeds run, seeds that failed, median planning time of the successes (s), "
+        "mean cycles per episode, constrained attempts that held / fell back (all episodes), "
+        "commit.",
+        "",
+        "| Task | Variant | Seeds | Failed | Median t (s) | Cycles | Held / fell back | Commit |",
+        "|---|---|---|---|---:|---:|---:|---|",
+    ]
+    for t in tasks:
+        for v in variants:
+            group = [r for r in recs if r["task"] == t and r["variant"] == v]
+            if not group:
+                continue
+            ok = [r for r in group if r.get("success")]
+            med = _median(
+                [float(r["planning_time"]) for r in ok if r.get("planning_time") is not None]
+            )
+            cycles = [float(r["cycles"]) for r in group if r.get("cycles") is not None]
+            held = sum(int(r.get("constrained_held") or 0) for r in group)
+            fell = sum(int(r.get("fallbacks") or 0) for r in group)
+            commits = sorted({(r.get("commit") or "?")[:7] for r in group})
+            lines.append(
+                "| "
+                + " | ".join(
+                    [
+                        _title(t),
+                        v,
+                        _seed_list(int(r["seed"]) for r in group),
+                        _seed_list(int(r["seed"]) for r in group if not r.get("success")),
+                        "–" if med is None else _fmt_time(med),
+                        f"{sum(cycles) / len(cycles):.1f}" if cycles else "–",
+                        f"{held} / {fell}",
+                        ", ".join(commits),
+                    ]
+                )
+                + " |"
+            )
+    return lines
 
 
 def render_plot(records: Iterable[dict], path: str | Path) -> None:
@@ -1168,20 +1239,42 @@ def render_plot(records: Iterable[dict], path: str | Path) -> None:
     plt.close(fig)
 
 
-def write_report(out_dir: str | Path, command: str | None = None) -> tuple[Path, Path, str]:
-    """Rebuild ``table.md`` and ``table1.png`` from ``episodes.jsonl`` alone."""
+def write_report(
+    out_dir: str | Path, command: str | None = None, sources: list[str | Path] | None = None
+) -> tuple[Path, Path, str]:
+    """Rebuild ``table.md`` and ``table1.png`` from ``episodes.jsonl`` alone.  With
+    ``sources`` (sweep folders), their episodes merged -- the last folder's record of a task,
+    variant and seed wins -- are written to ``out_dir/episodes.jsonl`` first, so that the
+    merged folder is a report of its own; the commands recorded in the sources' tables are
+    kept in the new one."""
     from .cli import write_atomically
 
     out = Path(out_dir)
-    path = out / EPISODES_FILE
-    if not path.is_file():
-        raise SSRError(
-            f"no {EPISODES_FILE} in this folder (run `ssr-compile experiment -o {out_dir}` first)",
-            file=str(out),
+    if sources:
+        records, commands = [], []
+        for src in map(Path, sources):
+            if src.resolve() == out.resolve() and len(sources) > 1:
+                raise SSRError(
+                    "is one of the sweeps to merge: name a new folder with -o "
+                    "(its episodes.jsonl would be overwritten)",
+                    file=str(out),
+                )
+            records += _records_of(src)
+            old = src / TABLE_FILE
+            found = _command_of(old.read_text(encoding="utf-8")) if old.is_file() else None
+            if found and found not in commands:
+                commands.append(found)
+        merged = list(latest(records).values())
+        if command is not None:
+            commands.append(command)
+        command = "\n".join(commands) or None
+        out.mkdir(parents=True, exist_ok=True)
+        write_atomically(
+            out / EPISODES_FILE, "".join(json.dumps(r, sort_keys=True) + "\n" for r in merged)
         )
-    records, _bad = read_records(path)
-    if not records:
-        raise SSRError("holds no episode records", file=str(path))
+        records = merged
+    else:
+        records = _records_of(out)
     if command is None:
         old = out / TABLE_FILE
         command = _command_of(old.read_text(encoding="utf-8")) if old.is_file() else None
@@ -1189,6 +1282,19 @@ def write_report(out_dir: str | Path, command: str | None = None) -> tuple[Path,
     write_atomically(out / TABLE_FILE, text)
     render_plot(records, out / PLOT_FILE)
     return out / TABLE_FILE, out / PLOT_FILE, text
+
+
+def _records_of(folder: Path) -> list[dict]:
+    path = folder / EPISODES_FILE
+    if not path.is_file():
+        raise SSRError(
+            f"no {EPISODES_FILE} in this folder (run `ssr-compile experiment -o {folder}` first)",
+            file=str(folder),
+        )
+    records, _bad = read_records(path)
+    if not records:
+        raise SSRError("holds no episode records", file=str(path))
+    return records
 
 
 def _command_of(table: str) -> str | None:

@@ -483,3 +483,65 @@ def test_no_episode_outlives_its_sweep(tmp_path, how):
         time.sleep(0.1)
     assert not any(_alive(p) for p in dead)
     assert not (out / "episodes.jsonl").read_text().strip()  # nothing recorded for it
+
+
+def _write(folder: Path, recs: list[dict]) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "episodes.jsonl", "w") as f:
+        for r in recs:
+            f.write(json.dumps(r) + "\n")
+
+
+def test_sweeps_are_merged_into_one_table_with_the_details(tmp_path, capsys):
+    # Table I is run in pieces (a variant, a range of seeds at a time); one table of them all,
+    # with what Table I does not show: seeds, failures, cycles, constrained attempts.
+    a, b, out = tmp_path / "a", tmp_path / "b", tmp_path / "all"
+
+    def rec(seed, ok, t, cycles, held, fell, commit, variant="both"):
+        r = _record("swap", variant, seed, ok, t)
+        r.update(cycles=cycles, constrained_held=held, fallbacks=fell, commit=commit)
+        return r
+
+    _write(
+        a, [rec(0, True, 100.0, 30, 20, 4, "aaaaaaa1"), rec(1, False, 600.0, 50, 3, 9, "aaaaaaa1")]
+    )
+    _write(
+        b,
+        [
+            rec(1, True, 200.0, 40, 25, 2, "bbbbbbb2"),  # seed 1 again: this one counts
+            rec(2, True, 150.0, 20, 10, 0, "bbbbbbb2"),
+            rec(3, True, 120.0, 10, 0, 0, "bbbbbbb2", variant="neither"),
+        ],
+    )
+    assert run_cli(["report", str(a), str(b)]) == 2  # several folders need -o
+    assert "need -o OUT" in capsys.readouterr().err
+    assert run_cli(["report", str(a), str(b), "-o", str(a)]) == 2  # a sweep's journal is kept
+    assert "would be overwritten" in capsys.readouterr().err
+    assert len(lines(a)) == 2
+    assert run_cli(["report", str(a), str(b), "-o", str(out)]) == 0
+    text = (out / "table.md").read_text()
+    merged = lines(out)
+    assert sorted((r["variant"], r["seed"]) for r in merged) == [
+        ("both", 0), ("both", 1), ("both", 2), ("neither", 3)
+    ]  # fmt: skip
+    assert next(r for r in merged if r["seed"] == 1)["commit"] == "bbbbbbb2"
+    rows = {
+        tuple(c.strip() for c in line.strip("|").split("|"))[1]: [
+            c.strip() for c in line.strip("|").split("|")
+        ]
+        for line in text.splitlines()
+        if line.startswith("| Swap |")
+    }
+    # both: seeds 0-2, none failed, median of 100/200/150, cycles (30+40+20)/3, 55 held / 6 fell
+    assert rows["both"] == ["Swap", "both", "0-2", "–", "150", "30.0", "55 / 6", "aaaaaaa, bbbbbbb"]
+    assert rows["neither"] == ["Swap", "neither", "3", "–", "120", "10.0", "0 / 0", "bbbbbbb"]
+    assert "100 [" in text and "(n=3)" in text  # Table I's cell: 3 of 3
+    # the merged folder is a report of its own: rebuilt alone, the same table
+    assert run_cli(["report", str(out)]) == 0
+    assert (out / "table.md").read_text() == text
+
+
+def test_seed_lists_are_folded():
+    assert X._seed_list([5, 0, 1, 2, 7, 8, 3]) == "0-3,5,7-8"
+    assert X._seed_list([]) == "–"
+    assert X._median([3.0, 1.0, 2.0, 10.0]) == 2.5
