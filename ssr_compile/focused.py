@@ -30,6 +30,7 @@ from . import syntax as S
 from .compile.instantiate import Instance, Result, ground_atom, real_instances
 from .compile.pipeline import compile_problem
 from .errors import InstanceCapReached, PlannerFailure, SSRError, StreamError, StreamFailure
+from .planners.base import UNSOLVABLE
 from .planners.costs import plan_cost
 from .preimage import PlanInvalid, plan_preimage, stream_plan
 from .stream import Generator, StreamsModule, ValueTable, call_function, call_test
@@ -528,7 +529,7 @@ class _FocusedLoop:
                     "timeout", message=f"the planner ran out of time at level {self.level}"
                 )
             if result.status != "solved":
-                done = self.raise_level(result, bound)
+                done = self.saturated(compiled, result, bound) or self.raise_level(result, bound)
             else:
                 done = self.use_plan(compiled, result)
             if done is not None:
@@ -620,6 +621,30 @@ class _FocusedLoop:
         size = _size(compiled, getattr(self.backend, "last_operators", None))
         self.stats.sizes.append(size)
         return result, size
+
+    def saturated(self, compiled, result, bound) -> Solution | None:
+        """ "unsolvable" now when no level can change the answer: the planner proved this
+        problem unsolvable, instantiation reached its fixed point below the level limit (a
+        higher level adds no stream instance), and no instance was held back at this level
+        (a level rise would give those back).  The next level's problem would be this one
+        again: a constrained attempt of the policy whose tail no longer fits spent its
+        levels 5-8 on the same problem, 2-3 s a call (Swap, eight times an episode)."""
+        inst = compiled.instantiation
+        if (
+            result.status != UNSOLVABLE
+            or self.ev.tried
+            or (inst is not None and not inst.saturated)
+        ):
+            return None
+        if self.level >= self.max_level:
+            return None  # the last level's own message says as much
+        took = time.monotonic() - self.start
+        why = " under the cost bound" if bound is not None else ""
+        return self.finish(
+            "unsolvable",
+            message=f"no plan{why} at level {self.level}, and no higher level adds a stream "
+            f"instance (found in {took:.1f} s)",
+        )
 
     def raise_level(self, result, bound) -> Solution | None:
         """No plan at this level: the next level (failed instances may be retried there), or

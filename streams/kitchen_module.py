@@ -502,12 +502,18 @@ class KitchenModule:
         """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite: the library's
         :func:`~ssr_compile.belief.observation.sample_obs`).  Only particles the fixed camera
         can see at all (the furniture alone, ``s`` open if it is a drawer) count: a region the
-        cabinet always hides would be detected at no real chance."""
+        cabinet always hides would be detected at no real chance.  A region :meth:`obscost`
+        refuses (the detection too unlikely to be an option) is not proposed: the planner
+        counted on it at :data:`C_DETECT`, the cost failed, and the next level drew the next
+        such region -- Swap, having seen the bottom drawer empty, spent a planner call per
+        level (1-3 s each at levels 7-9) on a detection there."""
         on = (pb.surface_names == s) & (pb.weights > 0)
         if not on.any():
             return
         on &= self._seeable(o, pb, s)
-        yield from sample_obs(o, pb, self.rng, delta=DELTA, eps=EPS, heaviest_first=True, among=on)
+        for out in sample_obs(o, pb, self.rng, delta=DELTA, eps=EPS, heaviest_first=True, among=on):
+            if self.obscost(o, pb, out[0]) is not None:
+                yield out
 
     def _seeable(self, o: str, pb: PoseBelief, s: str) -> np.ndarray:
         key = (pb.digest, s)

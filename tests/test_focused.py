@@ -302,3 +302,21 @@ def test_rejected_draws_are_redrawn_at_their_level_and_the_plan_simulates():
     _, again = run("problem-blocked.pddl", redraws=2)
     assert [str(s) for s in again.plan] == [str(s) for s in sol.plan]
     assert again.stats.planner_calls == sol.stats.planner_calls
+
+
+def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_path):
+    # Holding both blocks at once is impossible whatever the streams give: once the optimistic
+    # problem stops growing and the planner proves it unsolvable, a higher level would plan
+    # the same problem again (the policy's constrained attempts spent levels 5-8 so).
+    d, s, p = task("problem.pddl")
+    text = (PP / "problem.pddl").read_text()
+    goal = "(:goal (exists (?p) (and (contained a ?p goal) (atpose a ?p))))"
+    assert goal in text
+    impossible = parse_problem(text.replace(goal, "(:goal (and (holding a ga) (holding b gb)))"))
+    sol = solve(d, s, impossible, fresh_module(), initial_level=1, max_level=8, time_limit=30)
+    assert sol.status == "unsolvable" and sol.plan is None
+    assert "no higher level adds a stream instance" in sol.message
+    assert sol.stats.levels[-1] < 8
+    assert sol.stats.planner_calls == len(sol.stats.levels)  # one call per level tried
+    # while instantiation still grows, levels go on (the goal pose test above: to level 4)
+    assert sol.stats.levels == sorted(set(sol.stats.levels))
