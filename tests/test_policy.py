@@ -258,6 +258,39 @@ def test_a_stream_that_never_returns_ends_the_episode_naming_it(monkeypatch):
     assert result.actions == []
 
 
+def test_a_stream_slow_in_a_constrained_attempt_times_the_attempt_out_only():
+    # A sampler's batch that starts just before a constrained attempt's limit and runs past
+    # its grace is no hung stream: the policy falls back to the unconstrained attempt.
+    import time as _time
+
+    episode = progress.make_episode(None, 0)
+    real_problem = episode.agent.problem
+    calls = {"problems": 0, "slow": 0}
+
+    def problem_with_a_slow_first_call():
+        problem, module = real_problem()
+        calls["problems"] += 1
+        inv_kin = module.streams["inv-kin"]
+
+        def slow_once(*args):
+            if calls["problems"] == 2 and calls["slow"] == 0:
+                calls["slow"] += 1
+                end = _time.monotonic() + 2.5  # past 0.5 s and the 1 s grace
+                while _time.monotonic() < end:
+                    pass
+            return inv_kin(*args)
+
+        module.streams["inv-kin"] = slow_once
+        return problem, module
+
+    episode.agent.problem = problem_with_a_slow_first_call
+    result = run_policy(episode, PolicySettings(constrained_time=0.5, max_cycles=25))
+    assert calls["slow"] == 1
+    assert result.success, result.reason
+    assert result.cycles[1].constrained == "timeout"
+    assert [a.split()[0] for a in result.actions] == ["(move-base", "(pick"]
+
+
 def test_constant_facts_leave_the_initial_state_to_the_next_problem():
     # A held object's grasp (`g-o`, a constant) is a fact of the state: kept past the placement,
     # the next problem would name an object it no longer declares.
