@@ -974,6 +974,19 @@ def cell_seed(task: str, variant: str) -> int:
     return zlib.crc32(f"{task}/{variant}".encode())
 
 
+def _groups(recs: list[dict], tasks: list[str], variants: list[str]):
+    """Per task and variant with episodes: the records, the successful ones and their
+    planning times."""
+    for t in tasks:
+        for v in variants:
+            group = [r for r in recs if r["task"] == t and r["variant"] == v]
+            if not group:
+                continue
+            ok = [r for r in group if r.get("success")]
+            times = [float(r["planning_time"]) for r in ok if r.get("planning_time") is not None]
+            yield t, v, group, ok, times
+
+
 def cells(records: Iterable[dict]) -> tuple[list[str], list[str], dict[tuple[str, str], Cell]]:
     """Tasks (kitchen tasks in the paper's order, then others as met), variants (Table I's
     order) and the cell of each (task, variant) with episodes."""
@@ -988,25 +1001,19 @@ def cells(records: Iterable[dict]) -> tuple[list[str], list[str], dict[tuple[str
     present = {r["variant"] for r in recs}
     variants = [v for v in VARIANTS if v in present] + sorted(present - set(VARIANTS))
     out: dict[tuple[str, str], Cell] = {}
-    for t in tasks:
-        for v in variants:
-            group = [r for r in recs if r["task"] == t and r["variant"] == v]
-            if not group:
-                continue
-            ok = [r for r in group if r.get("success")]
-            times = [float(r["planning_time"]) for r in ok if r.get("planning_time") is not None]
-            mean = sum(times) / len(times) if times else None
-            out[(t, v)] = Cell(
-                t,
-                v,
-                len(group),
-                len(ok),
-                len(ok) / len(group),
-                wilson(len(ok), len(group)),
-                mean,
-                bootstrap_mean(times, cell_seed(t, v)) if times else None,
-                sum(r.get("status") not in (FINISHED, None) for r in group),
-            )
+    for t, v, group, ok, times in _groups(recs, tasks, variants):
+        mean = sum(times) / len(times) if times else None
+        out[(t, v)] = Cell(
+            t,
+            v,
+            len(group),
+            len(ok),
+            len(ok) / len(group),
+            wilson(len(ok), len(group)),
+            mean,
+            bootstrap_mean(times, cell_seed(t, v)) if times else None,
+            sum(r.get("status") not in (FINISHED, None) for r in group),
+        )
     return tasks, variants, out
 
 
@@ -1134,35 +1141,28 @@ def render_details(recs: list[dict]) -> list[str]:
         "| Task | Variant | Seeds | Failed | Median t (s) | Cycles | Held / fell back | Commit |",
         "|---|---|---|---|---:|---:|---:|---|",
     ]
-    for t in tasks:
-        for v in variants:
-            group = [r for r in recs if r["task"] == t and r["variant"] == v]
-            if not group:
-                continue
-            ok = [r for r in group if r.get("success")]
-            med = _median(
-                [float(r["planning_time"]) for r in ok if r.get("planning_time") is not None]
+    for t, v, group, _ok, times in _groups(recs, tasks, variants):
+        med = _median(times)
+        cycles = [float(r["cycles"]) for r in group if r.get("cycles") is not None]
+        held = sum(int(r.get("constrained_held") or 0) for r in group)
+        fell = sum(int(r.get("fallbacks") or 0) for r in group)
+        commits = sorted({(r.get("commit") or "?")[:7] for r in group})
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    _title(t),
+                    v,
+                    _seed_list(int(r["seed"]) for r in group),
+                    _seed_list(int(r["seed"]) for r in group if not r.get("success")),
+                    "–" if med is None else _fmt_time(med),
+                    f"{sum(cycles) / len(cycles):.1f}" if cycles else "–",
+                    f"{held} / {fell}",
+                    ", ".join(commits),
+                ]
             )
-            cycles = [float(r["cycles"]) for r in group if r.get("cycles") is not None]
-            held = sum(int(r.get("constrained_held") or 0) for r in group)
-            fell = sum(int(r.get("fallbacks") or 0) for r in group)
-            commits = sorted({(r.get("commit") or "?")[:7] for r in group})
-            lines.append(
-                "| "
-                + " | ".join(
-                    [
-                        _title(t),
-                        v,
-                        _seed_list(int(r["seed"]) for r in group),
-                        _seed_list(int(r["seed"]) for r in group if not r.get("success")),
-                        "–" if med is None else _fmt_time(med),
-                        f"{sum(cycles) / len(cycles):.1f}" if cycles else "–",
-                        f"{held} / {fell}",
-                        ", ".join(commits),
-                    ]
-                )
-                + " |"
-            )
+            + " |"
+        )
     return lines
 
 
