@@ -18,9 +18,10 @@ import json
 import sys
 import time
 
-from ssr_compile.policy import VARIANTS, PolicySettings, run_policy
 from ssr_compile.sim.tasks import TASKS
 from ssr_compile.streams.kitchen_env import make_episode
+
+from ssr_compile.policy import VARIANTS, PolicySettings, run_policy
 
 
 def seeds(text: str) -> list[int]:

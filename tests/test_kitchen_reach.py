@@ -68,7 +68,7 @@ def test_side_grasps_whose_hand_faces_the_robot_have_no_base(cook0):
                     continue
                 calls = []
                 kin = ks.inv_kin
-                ks.inv_kin = lambda *a, **k: calls.append(a) or kin(*a, **k)
+                ks.inv_kin = lambda *a, _c=calls, _k=kin, **k: _c.append(a) or _k(*a, **k)
                 bases = list(ks.inv_reach(obj, p, g))
                 ks.inv_kin = kin
                 if abs(bearing) > samplers.SIDE_BEARING_LIMIT:
@@ -84,8 +84,9 @@ def test_side_grasps_whose_hand_faces_the_robot_have_no_base(cook0):
 def test_grasps_reached_at_the_believed_pose_come_first(cook0):
     # The cracker box of Cook seed 0 stands so that one of its four grasps is reached from
     # some base; sample-grasp yields that one first once the box's pose is believed.
-    from ssr_compile.belief.particles import PoseBelief
     from ssr_compile.streams.kitchen_module import KitchenModule
+
+    from ssr_compile.belief.particles import PoseBelief
 
     w = cook0.world
     km = KitchenModule(cook0, np.random.default_rng(2))
@@ -231,8 +232,9 @@ def test_a_pre_grasp_inside_an_object_the_robot_put_down_is_refused(cook0):
     # Cook seed 1 put both boxes down beside the block, then drove to the same base 80 times:
     # the pre-grasp was inside a box, and the arm motion to it (deferred) failed each time it
     # came next.  Objects where they were found are not checked (a plan may move them first).
-    from ssr_compile.belief.particles import PoseBelief
     from ssr_compile.streams.kitchen_module import KitchenModule
+
+    from ssr_compile.belief.particles import PoseBelief
 
     w = cook0.world
     km = KitchenModule(cook0, np.random.default_rng(6))
@@ -265,11 +267,11 @@ def test_a_placement_the_world_refused_is_not_proposed_again(cook0):
     # configuration lands it at the same pose, and the true world refused it each time.
     from types import SimpleNamespace
 
-    from ssr_compile.belief.particles import PoseBelief
     from ssr_compile.streams.kitchen_env import make_episode
     from ssr_compile.streams.kitchen_module import REFUSED_NEAR, KitchenModule
 
-    w = cook0.world
+    from ssr_compile.belief.particles import PoseBelief
+
     km = KitchenModule(cook0, np.random.default_rng(7))
     stove = [pb for (pb,) in (next(iter(km.sample_placement("block", "stove"))),)][0]
     s, (x, y, z, yaw) = stove.point_estimate()
