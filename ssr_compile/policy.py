@@ -440,15 +440,14 @@ def run_policy(
                 # are no deeper now (more of their inputs are real), and each level below
                 # was a planner call on a problem without the tail (Swap: levels 1-4 of
                 # every constrained attempt, 0.3-0.7 s each, "0 ground actions").
-                # Up to the same last level as before: an attempt whose tail no longer fits
-                # climbed to level 11 in Cook (problems of 1,600 objects) and timed out.
+                # As many levels as from the first (a level rise also retries what failed).
                 first = max(settings.initial_level, min(last_level, settings.max_level))
                 solution = attempt(
                     problem,
                     module,
                     limit,
                     "c",
-                    settings.max_level,
+                    settings.max_level + first - settings.initial_level,
                     first_level=first,
                     state=replace(state, constants=state.constants | own),
                 )

@@ -35,18 +35,14 @@ def _progress(seed: int, variant: str, **kw):
 
 
 def test_with_plan_constraints_the_robot_moves_its_base_once_and_picks():
-    held = 0
     for seed in SEEDS:
         episode, result = _progress(seed, "both")
         assert result.success, (seed, result.reason)
         assert episode.environment.base_motions == 1, seed
         assert [a.split()[0] for a in result.actions] == ["(move-base", "(pick"]
         assert len(result.cycles) == 3  # move, pick, then the empty plan
-        held += result.constrained_held  # the pick kept the first plan's structure
-        assert result.cycles[1].constrained in ("held", "fell back")
-    # Seed 9: the planned grasp's IK fails from the reached base at every level of the
-    # attempt (levels 3-8); the fallback picks with another grasp, from the same base.
-    assert held >= len(SEEDS) - 1
+        assert result.constrained_held == 1  # the pick kept the first plan's structure
+        assert result.cycles[1].constrained == "held"
 
 
 def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
@@ -58,7 +54,7 @@ def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
         said: list[str] = []
         episode = progress.make_episode(None, seed)
         result = run_policy(episode, PolicySettings(max_cycles=25), progress=said.append)
-        assert result.success, seed
+        assert result.cycles[1].constrained == "held", seed
         attempts: list[list[int]] = []  # the levels of each solve's iterations
         for x in said:
             m = re.match(r"iteration (\d+): level (\d+)", x)
@@ -66,10 +62,10 @@ def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
                 if m.group(1) == "1":
                     attempts.append([])
                 attempts[-1].append(int(m.group(2)))
-        first, constrained = attempts[0], attempts[1]  # the first plan, the constrained attempt
+        assert len(attempts) == 3  # the first plan, the constrained attempt, the empty plan
+        first, constrained, _ = attempts
         assert first[0] == 1 and first[-1] > 1, seed
         assert constrained[0] == first[-1], seed  # not level 1 again
-        assert constrained[-1] <= PolicySettings().max_level  # and no higher than before
 
 
 def test_without_plan_constraints_replanning_moves_the_base_again_and_again():
