@@ -386,8 +386,8 @@ class KitchenModule:
         through it, which the true world refuses (and a replan would try the same path again).
         Drawers are where they will be when the motion is taken (:meth:`_openings_at`), not
         where the robot saw them: Swap without deferral opened the bottom drawer, and every
-        motion towards the top drawer's handle, checked against the bottom drawer open, failed
-        level after level until the instance cap."""
+        motion to its approach for pulling it open again later (after closing it), checked with
+        the hand inside the open drawer, failed level after level until the instance cap."""
         openings = self._openings_at(q1, q2)
         with self.planning() as w:
             for d, q in (openings or {}).items():
