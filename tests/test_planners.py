@@ -16,6 +16,7 @@ from ssr_compile.planners import (
     GROUP,
     Capabilities,
     PlanResult,
+    _installed,
     available_planners,
     describe_planners,
     get_planner,
@@ -181,7 +182,7 @@ def make_echo(variant=None, **options):
     return _Echo()
 
 
-def test_third_party_entry_point(monkeypatch):
+def test_third_party_entry_point(monkeypatch, request):
     real = importlib.metadata.entry_points
     extra = importlib.metadata.EntryPoint(name="echo", value=f"{__name__}:make_echo", group=GROUP)
 
@@ -190,6 +191,8 @@ def test_third_party_entry_point(monkeypatch):
         return found + [extra] if params.get("group") == GROUP else found
 
     monkeypatch.setattr("ssr_compile.planners.entry_points", entry_points)
+    _installed.cache_clear()  # entry points are read once per process
+    request.addfinalizer(_installed.cache_clear)
     assert "echo" in available_planners() and "fd" in available_planners()
     echo = get_planner("echo")
     domain, problem = load("blocks", "blocks-solved")
