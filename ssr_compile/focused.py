@@ -38,6 +38,7 @@ from .stream import Generator, StreamsModule, ValueTable, call_function, call_te
 SOLVED = "solved"
 # Cost functions and tests at most this expensive (StreamInfo.cost) are evaluated eagerly.
 EAGER_COST = 0.1
+RESAMPLE = 2  # default ``resample`` of :func:`solve`
 
 
 @dataclass
@@ -61,6 +62,7 @@ class Statistics:
     # values, ground actions when the planner reports them, else None).
     sizes: list[tuple[int, int, int, int | None]] = field(default_factory=list)
     compile_time: float = 0.0
+    resamples: int = 0  # generator draws taken again within one stream plan (``resample``)
 
     def stream(self, name: str) -> StreamStats:
         return self.streams.setdefault(name, StreamStats())
@@ -74,6 +76,7 @@ class Statistics:
             "stream_time": round(self.stream_time, 4),
             "total_time": round(self.total_time, 4),
             "compile_time": round(self.compile_time, 4),
+            "resamples": self.resamples,
             "sizes": [list(z) for z in self.sizes],
             "streams": {
                 k: vars(v) | {"time": round(v.time, 4)} for k, v in sorted(self.streams.items())
@@ -345,6 +348,7 @@ def solve(
     eager_cost: float = EAGER_COST,
     eager_tests: bool = True,
     redraws: int = 0,
+    resample: int = RESAMPLE,
     accept_drawn: bool | None = None,
     share: bool = False,
     state: ReplanState | None = None,
@@ -368,6 +372,10 @@ def solve(
     level without a sample (whose optimistic problem the planner may then have to prove
     unsolvable, at a cost exponential in the number of objects to arrange); off by default
     (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
+    ``resample``: a generator of the stream plan whose fresh draw failed, or was rejected by
+    one of the plan's tests, draws again at once, up to this many times per stream plan, and
+    what depends on it is evaluated again -- a stream call instead of a planner call
+    (``0``: off).
     ``accept_drawn``: when every result of a stream plan succeeds and the plan, with the
     values drawn, is valid and costs no more than planned, it is the solution (no planner call
     to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
@@ -402,6 +410,7 @@ def solve(
         eager_cost=eager_cost,
         eager_tests=eager_tests,
         redraws=redraws,
+        resample=resample,
         accept_drawn=accept_drawn,
         share=share,
         leaves=leaves,
@@ -460,6 +469,7 @@ class _FocusedLoop:
         eager_cost: float,
         eager_tests: bool,
         redraws: int,
+        resample: int,
         accept_drawn: bool | None,
         share: bool,
         leaves: bool = True,
@@ -493,6 +503,7 @@ class _FocusedLoop:
         self.best_failure = "no plan"
         self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
         self.redraws_per_level = max(int(redraws), 0)
+        self.resample = max(int(resample), 0)
         if accept_drawn is None:
             accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
         self.accept_drawn = accept_drawn
@@ -726,47 +737,112 @@ class _FocusedLoop:
     def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:
         """Evaluate the stream plan in order, binding optimistic objects to real values; a
         result whose inputs or domain facts come from a failed one is skipped (``None``: plan
-        again, with the new real facts)."""
+        again, with the new real facts).
+
+        A generator whose fresh draw failed, or whose draw a test of this stream plan
+        rejected, draws again at once -- at most ``resample`` times per result -- and what
+        depends on its outputs is evaluated again (:meth:`_to_redraw`): one more sample for
+        the same plan costs a stream call, where planning again cost a planner call on a
+        larger problem (Cook: 2-6 s per call, once per rejected placement or observation)."""
         binding: dict[str, Any] = {}  # optimistic object -> its real name
         values_of: dict[str, list[str]] = {}  # shared optimistic object -> real names
         facts = _RealFacts(self.problem, self.ev)
-        failed: set[str] = set()
-        # Facts the stream plan counted on whose producer failed in this iteration: a result
-        # whose domain needs one of them is not evaluated (its domain does not hold), and
-        # what it would certify is unproven too.
-        failed_facts: set[S.Atom] = set()
+        settled: dict[int, bool] = {}  # evaluated results (by id) and their outcome
+        drawn: set[int] = set()  # generator results drawn afresh in this evaluation
+        again: dict[int, int] = {}  # draws each result had again
+        producer = {o: r for r in ordered for o in r.outputs}
         self.stream_plan_ok = False
-        all_ok = True
-        for res in ordered:
-            if time.monotonic() >= self.deadline:
-                return self.finish(
-                    "timeout",
-                    message=f"time limit of {self.time_limit:g} s reached while evaluating streams",
-                )
-            if any(x in failed for x in res.instance.inputs) or any(
-                f in failed_facts for f in res.domain
-            ):
-                failed.update(res.outputs)
-                failed_facts.update(res.certified)
-                all_ok = False
-                continue
-            if not shared or not any(x in shared for x in (*res.instance.inputs, *res.outputs)):
-                ok = self.ev.evaluate(res, binding)
-                self.ev.record(ok, res.instance.stream)
-                if not ok:
-                    all_ok = False
+        while True:
+            failed: set[str] = set()
+            # Facts the stream plan counted on whose producer failed in this iteration: a
+            # result whose domain needs one of them is not evaluated (its domain does not
+            # hold), and what it would certify is unproven too.
+            failed_facts: set[S.Atom] = set()
+            all_ok = True
+            redraw: list[Result] = []
+            for res in ordered:
+                if time.monotonic() >= self.deadline:
+                    return self.finish(
+                        "timeout",
+                        message=f"time limit of {self.time_limit:g} s reached while evaluating streams",
+                    )
+                rid = id(res)
+                if rid in settled:
+                    if not settled[rid]:
+                        all_ok = False
+                        failed.update(res.outputs)
+                        failed_facts.update(res.certified)
+                    continue
+                if any(x in failed for x in res.instance.inputs) or any(
+                    f in failed_facts for f in res.domain
+                ):
                     failed.update(res.outputs)
                     failed_facts.update(res.certified)
-                    self.say(f"  {res.instance} failed")
-                    if res.instance.kind == "test":
-                        self.redraw_rejected(res, binding)
-                continue
-            if not self.evaluate_shared(res, shared, binding, values_of, facts):
+                    all_ok = False
+                    continue
+                if shared and any(x in shared for x in (*res.instance.inputs, *res.outputs)):
+                    ok = self.evaluate_shared(res, shared, binding, values_of, facts)
+                    settled[rid] = ok
+                    if not ok:
+                        all_ok = False
+                        failed.update(res.outputs)
+                    continue
+                ok = self.ev.evaluate(res, binding)
+                fresh = self.ev.called
+                self.ev.record(ok, res.instance.stream)
+                settled[rid] = ok
+                if res.instance.kind == "stream" and fresh:
+                    drawn.add(rid)
+                if ok:
+                    continue
                 all_ok = False
                 failed.update(res.outputs)
+                failed_facts.update(res.certified)
+                self.say(f"  {res.instance} failed")
+                if res.instance.kind == "test":
+                    self.redraw_rejected(res, binding)
+                    blamed = [producer[x] for x in res.instance.inputs if x in producer]
+                else:
+                    blamed = [res]
+                redraw += self._to_redraw(blamed, drawn, again, binding)
+            if all_ok or not redraw:
+                break
+            # The redrawn results and everything downstream of them are evaluated again.
+            outputs = {o for r in redraw for o in r.outputs}
+            for r in ordered:
+                if id(r) in {id(x) for x in redraw} or any(x in outputs for x in r.instance.inputs):
+                    outputs.update(r.outputs)
+                    settled.pop(id(r), None)
+                    drawn.discard(id(r))
+            for o in outputs:
+                binding.pop(o, None)
+            for r in redraw:
+                again[id(r)] = again.get(id(r), 0) + 1
+                self.stats.resamples += 1
+            self.say("  drawing again: " + ", ".join(str(r.instance) for r in redraw))
         self.stream_plan_ok = all_ok
         self.stream_plan_binding = binding
         return None
+
+    def _to_redraw(
+        self, blamed: list[Result], drawn: set[int], again: dict[int, int], binding: dict
+    ) -> list[Result]:
+        """Those of ``blamed`` to draw again now: generator results drawn afresh in this
+        evaluation, not exhausted, under their ``resample`` limit."""
+        out = []
+        for r in blamed:
+            if r.instance.kind != "stream" or id(r) not in drawn:
+                continue
+            if again.get(id(r), 0) >= self.resample:
+                continue
+            real = Instance(
+                r.instance.stream,
+                tuple(binding.get(y, y) for y in r.instance.inputs),
+                r.instance.kind,
+            )
+            if real not in self.ev.exhausted and all(x is not r for x in out):
+                out.append(r)
+        return out
 
     def redraw_rejected(self, test: Result, binding: dict[str, str]) -> None:
         """A test failed on a value a generator of this stream plan just drew: the draw was

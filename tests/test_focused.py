@@ -304,6 +304,39 @@ def test_rejected_draws_are_redrawn_at_their_level_and_the_plan_simulates():
     assert again.stats.planner_calls == sol.stats.planner_calls
 
 
+def test_a_failed_or_rejected_draw_is_drawn_again_at_once_instead_of_planning_again():
+    # a's first inverse kinematics fails and b's first table pose hits a: drawn again within
+    # the same stream plan, no planner call is spent on either, and the plan still simulates.
+    sols = {}
+    for resample in (0, 1):
+        module = fresh_module()
+        module.module.FAIL_FIRST_IK = {0.3}
+        _, sols[resample] = run(module=module, resample=resample)
+        assert sols[resample].status == "solved", sols[resample].message
+        _simulate(sols[resample].plan, module.values, {"a": 0.3, "b": 5.2})
+    off, on = sols[0], sols[1]
+    assert off.stats.resamples == 0 and on.stats.resamples >= 1
+    assert on.stats.planner_calls < off.stats.planner_calls
+    assert on.cost <= off.cost
+
+
+def test_draws_again_stop_at_the_limit_and_at_an_exhausted_generator():
+    # Every pose of b on the table hits a (test-cfree fails): each stream plan draws a rejected
+    # generator again at most ``resample`` times, then plans again.
+    for resample in (1, 3):
+        module = fresh_module()
+        module.module.CFREE_NEVER = True
+        said: list[str] = []
+        run(module=module, resample=resample, progress=said.append, max_level=4, time_limit=20)
+        per_plan: list[int] = []
+        for line in said:
+            if line.startswith("  stream plan:"):
+                per_plan.append(0)
+            elif line.startswith("  drawing again:") and per_plan:
+                per_plan[-1] += 1
+        assert per_plan and max(per_plan) == resample, (resample, per_plan)
+
+
 def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_path):
     # Holding both blocks at once is impossible whatever the streams give: once the optimistic
     # problem stops growing and the planner proves it unsolvable, a higher level would plan
