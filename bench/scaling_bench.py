@@ -12,6 +12,7 @@ Run: python bench/scaling_bench.py               # sizes 1..8, one run each (abo
      python bench/scaling_bench.py --full        # 3 runs per size (medians), longer limits
      python bench/scaling_bench.py --sizes 1 2 3 --runs 3 --planner fd:opt
      python bench/scaling_bench.py --redraws 4 --accept-drawn   # see the solver's keywords
+     python bench/scaling_bench.py --resample 0                 # without drawing again at once
      python bench/scaling_bench.py --algorithm focused adaptive # both, interleaved, a row each
 """
 
@@ -27,7 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ssr_compile.focused import solve  # noqa: E402
+from ssr_compile.focused import RESAMPLE, solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
 
 FOLDER = ROOT / "domains/pddl/tamp2d"
@@ -88,6 +89,7 @@ def run_once(n: int, args, algorithm: str = "focused") -> tuple:
         initial_level=args.level,
         max_level=args.max_level,
         redraws=args.redraws,
+        resample=args.resample,
         accept_drawn=args.accept_drawn or None,
         algorithm=algorithm,
     )
@@ -118,6 +120,13 @@ def main() -> None:
         help="rejected draws a generator may redraw per level (the solver's redraws keyword)",
     )
     ap.add_argument(
+        "--resample",
+        type=int,
+        default=RESAMPLE,
+        help="draws again at once of a generator whose draw failed or was rejected, per stream "
+        f"plan (the solver's resample keyword; default {RESAMPLE}, 0: off)",
+    )
+    ap.add_argument(
         "--accept-drawn",
         action="store_true",
         help="a plan whose stream plan all succeeds is the solution, also with a suboptimal "
@@ -142,6 +151,7 @@ def main() -> None:
         f"planner {args.planner}, {args.runs} run(s) per size, medians"
         + (", with a blocker" if args.blockers else "")
         + (f", redraws {args.redraws}" if args.redraws else "")
+        + f", resample {args.resample}"
         + (", accept_drawn" if args.accept_drawn else "")
     )
     print(head)

@@ -22,7 +22,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 _DEFAULTS_NOTE = (
     "With an example FOLDER, the settings in its example.toml (planner, time_limit, level, "
-    "max_level, max_cost, defer, algorithm) apply first, in place of the defaults below; an option given "
+    "max_level, max_cost, defer, algorithm, resample) apply first, in place of the defaults below; an option given "
     "on the command line always wins.  -v prints the settings in force and where each came "
     "from (flag, example.toml, default)."
 )
@@ -97,6 +97,14 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "deterministic per seed); or example.toml's",
     )
     p.add_argument(
+        "--resample",
+        type=_check_resample,
+        metavar="N",
+        help="a generator whose draw failed, or was rejected by a test of the stream plan, "
+        "draws again at once, up to N times per stream plan, before the planner is called "
+        "again (default 2; 0: off); or example.toml's",
+    )
+    p.add_argument(
         "--seed",
         type=cli.seed,
         metavar="N",
@@ -131,6 +139,7 @@ DEFAULTS = {
     "max_cost": math.inf,
     "defer": False,
     "algorithm": "focused",
+    "resample": 2,  # focused.RESAMPLE (not imported here: the solver loads in ~0.4 s)
     "seed": 0,
 }
 _FLAGS = {
@@ -141,6 +150,7 @@ _FLAGS = {
     "max_cost": "--max-cost",
     "defer": "--defer/--no-defer",
     "algorithm": "--algorithm",
+    "resample": "--resample",
     "seed": "--seed",
 }
 
@@ -163,6 +173,10 @@ def _check_algorithm(text: str) -> str:
     return text
 
 
+def _check_resample(text: str) -> int:
+    return cli.count(text, 0, what="a number of draws")
+
+
 def _check_name(text: str) -> str:
     if not text:
         raise argparse.ArgumentTypeError("expected a planner name")
@@ -177,6 +191,7 @@ _CHECKS = {
     "max_cost": cli.cost_bound,
     "defer": _check_bool,
     "algorithm": _check_algorithm,
+    "resample": _check_resample,
     "seed": cli.seed,
 }
 
@@ -307,10 +322,11 @@ def run(args: argparse.Namespace) -> int:
     if args.verbose:
         print("settings in force:", file=sys.stderr)
         print(describe_settings(settings), file=sys.stderr)
-    planner, time_limit, level, max_level, max_cost, defer, seed, algorithm = (
+    planner, time_limit, level, max_level, max_cost, defer, seed, algorithm, resample = (
         settings[n][0]
         for n in (
-            "planner", "time_limit", "level", "max_level", "max_cost", "defer", "seed", "algorithm"
+            "planner", "time_limit", "level", "max_level", "max_cost", "defer", "seed", "algorithm",
+            "resample",
         )
     )
     results = []
@@ -348,6 +364,7 @@ def run(args: argparse.Namespace) -> int:
                     max_level=max_level,
                     progress=progress,
                     algorithm=algorithm,
+                    resample=resample,
                 )
         except TimeLimitReached as e:
             status = 1

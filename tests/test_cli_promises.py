@@ -255,3 +255,21 @@ def test_quiet_import_keeps_output_working(tmp_path):
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert r.stdout == "before\nafter 0\n" and r.stderr == "err\n"
+
+
+def test_resample_is_a_setting_with_the_solvers_default(capsys):
+    from ssr_compile.cli_solve import DEFAULTS
+    from ssr_compile.focused import RESAMPLE
+
+    assert DEFAULTS["resample"] == RESAMPLE
+    assert main(["solve", "tamp2d", "--problem", "problem", "--resample", "0", "-v"]) == 0
+    err = capsys.readouterr().err
+    assert "resample    0  (flag --resample)" in err
+    assert "drawing again" not in err  # off: sample-grasp's failed first draw is planned around
+    assert main(["solve", "tamp2d", "--problem", "problem", "-v"]) == 0
+    err = capsys.readouterr().err
+    assert f"resample    {RESAMPLE}  (default)" in err and "drawing again: sample-grasp" in err
+    with pytest.raises(SystemExit) as exit_:
+        main(["solve", "tamp2d", "--resample", "-1"])
+    assert exit_.value.code == 2
+    assert "expected a number of draws 0 or more, got '-1'" in capsys.readouterr().err
