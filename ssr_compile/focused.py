@@ -372,10 +372,10 @@ def solve(
     level without a sample (whose optimistic problem the planner may then have to prove
     unsolvable, at a cost exponential in the number of objects to arrange); off by default
     (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
-    ``resample``: a generator of the stream plan whose fresh draw failed, or was rejected by
-    one of the plan's tests, draws again at once, up to this many times per stream plan, and
-    what depends on it is evaluated again -- a stream call instead of a planner call
-    (``0``: off).
+    ``resample``: a generator of the stream plan whose draw was rejected by one of the plan's
+    tests draws again at once, up to this many times per stream plan, and what depends on it
+    is evaluated again -- a stream call instead of a planner call; one whose draw failed draws
+    again once, while that pays off for its stream (``0``: off).
     ``accept_drawn``: when every result of a stream plan succeeds and the plan, with the
     values drawn, is valid and costs no more than planned, it is the solution (no planner call
     to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
@@ -504,6 +504,8 @@ class _FocusedLoop:
         self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
         self.redraws_per_level = max(int(redraws), 0)
         self.resample = max(int(resample), 0)
+        # per stream: draws again after a failed draw, and how many gave a value
+        self.draw_again_paid: dict[str, list[int]] = {}
         if accept_drawn is None:
             accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
         self.accept_drawn = accept_drawn
@@ -739,17 +741,21 @@ class _FocusedLoop:
         result whose inputs or domain facts come from a failed one is skipped (``None``: plan
         again, with the new real facts).
 
-        A generator whose fresh draw failed, or whose draw a test of this stream plan
-        rejected, draws again at once -- at most ``resample`` times per result -- and what
-        depends on its outputs is evaluated again (:meth:`_to_redraw`): one more sample for
-        the same plan costs a stream call, where planning again cost a planner call on a
-        larger problem (Cook: 2-6 s per call, once per rejected placement or observation)."""
+        A generator whose draw a test of this stream plan rejected draws again at once -- at
+        most ``resample`` times per result -- and what depends on its outputs is evaluated
+        again (:meth:`_to_redraw`): one more sample for the same plan costs a stream call,
+        where planning again cost a planner call on a larger problem (Cook: 2-6 s per call,
+        once per rejected placement or observation).  A generator whose draw failed draws
+        again once, while that pays off for its stream in this solve: a sampler that found
+        nothing for its inputs mostly finds nothing again (Swap's placements into a drawer out
+        of reach, ~0.3 s a draw), one that fails at first by design does not."""
         binding: dict[str, Any] = {}  # optimistic object -> its real name
         values_of: dict[str, list[str]] = {}  # shared optimistic object -> real names
         facts = _RealFacts(self.problem, self.ev)
         settled: dict[int, bool] = {}  # evaluated results (by id) and their outcome
         drawn: set[int] = set()  # generator results drawn afresh in this evaluation
         again: dict[int, int] = {}  # draws each result had again
+        after_failure: set[int] = set()  # results drawing again after a failed draw
         producer = {o: r for r in ordered for o in r.outputs}
         self.stream_plan_ok = False
         while True:
@@ -791,6 +797,11 @@ class _FocusedLoop:
                 fresh = self.ev.called
                 self.ev.record(ok, res.instance.stream)
                 settled[rid] = ok
+                if rid in after_failure:
+                    after_failure.discard(rid)
+                    paid = self.draw_again_paid.setdefault(res.instance.stream, [0, 0])
+                    paid[0] += 1
+                    paid[1] += int(ok)
                 if res.instance.kind == "stream" and fresh:
                     drawn.add(rid)
                 if ok:
@@ -802,9 +813,11 @@ class _FocusedLoop:
                 if res.instance.kind == "test":
                     self.redraw_rejected(res, binding)
                     blamed = [producer[x] for x in res.instance.inputs if x in producer]
-                else:
-                    blamed = [res]
-                redraw += self._to_redraw(blamed, drawn, again, binding)
+                    redraw += self._to_redraw(blamed, drawn, again, binding, self.resample)
+                elif self._draw_again_pays(res.instance.stream):
+                    own = self._to_redraw([res], drawn, again, binding, min(self.resample, 1))
+                    after_failure.update(id(r) for r in own)
+                    redraw += own
             if all_ok or not redraw:
                 break
             # The redrawn results and everything downstream of them are evaluated again.
@@ -824,16 +837,27 @@ class _FocusedLoop:
         self.stream_plan_binding = binding
         return None
 
+    def _draw_again_pays(self, stream: str) -> bool:
+        """Drawing again after a failed draw of ``stream``: not tried yet in this solve, or it
+        gave a value at least once."""
+        tries, successes = self.draw_again_paid.get(stream, (0, 0))
+        return tries == 0 or successes > 0
+
     def _to_redraw(
-        self, blamed: list[Result], drawn: set[int], again: dict[int, int], binding: dict
+        self,
+        blamed: list[Result],
+        drawn: set[int],
+        again: dict[int, int],
+        binding: dict,
+        limit: int,
     ) -> list[Result]:
         """Those of ``blamed`` to draw again now: generator results drawn afresh in this
-        evaluation, not exhausted, under their ``resample`` limit."""
+        evaluation, not exhausted, that have drawn again fewer than ``limit`` times."""
         out = []
         for r in blamed:
             if r.instance.kind != "stream" or id(r) not in drawn:
                 continue
-            if again.get(id(r), 0) >= self.resample:
+            if again.get(id(r), 0) >= limit:
                 continue
             real = Instance(
                 r.instance.stream,

@@ -320,6 +320,19 @@ def test_a_failed_or_rejected_draw_is_drawn_again_at_once_instead_of_planning_ag
     assert on.cost <= off.cost
 
 
+def test_a_sampler_that_finds_nothing_draws_again_once_per_solve():
+    # No inverse kinematics for a at its start, ever: after one draw again that gave nothing,
+    # a failed draw of inverse-kin is left to the next level, as without resample.
+    module = fresh_module()
+    module.module.NO_IK = {0.3}
+    said: list[str] = []
+    _, sol = run(module=module, progress=said.append, max_level=5, time_limit=20)
+    assert sol.status == "unsolvable", sol.message
+    failed = [line for line in said if line.startswith("  inverse-kin") and "failed" in line]
+    again = [line for line in said if line.startswith("  drawing again:") and "inverse-kin" in line]
+    assert len(failed) >= 3 and len(again) == 1, (failed, again)
+
+
 def test_draws_again_stop_at_the_limit_and_at_an_exhausted_generator():
     # Every pose of b on the table hits a (test-cfree fails): each stream plan draws a rejected
     # generator again at most ``resample`` times, then plans again.
