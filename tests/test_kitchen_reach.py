@@ -3,6 +3,7 @@ where a noisy base motion lands, side grasps no base reaches, grasps reached at 
 believed pose tried first, and arm paths that start where the arm is although the object's
 estimate moved a little."""
 
+import math
 import itertools
 
 import numpy as np
@@ -340,6 +341,42 @@ def test_drawer_bases_reach_the_handle_from_near_too_and_are_reused():
             assert ks.plan_drawer("bottom_drawer", 0.0, DRAWER_TRAVEL, b) is not None
         # asked again, the base that served comes first
         assert next(iter(ks.sample_drawer_base("bottom_drawer")))[0] == first
+    finally:
+        task.close()
+
+
+def test_drawer_bases_are_sampled_beside_the_drawers_axis():
+    # Seen from the open handle, a base in front of the drawer has the hand pull the handle
+    # into the robot; beside the axis, on the side that serves, 1 base in 6 serves the bottom
+    # drawer from where it lands too, 1 in 16 within +-60 deg.  The bases drawn are beside it,
+    # three in four on that side, and serve.
+    from ssr_compile.sim.robot import mount_position
+    from ssr_compile.sim.world import DRAWER_TRAVEL
+
+    task = make_task("inspect", 0)
+    try:
+        ks = KitchenStreams(task.world, np.random.default_rng(3))
+        handle = np.asarray(ks.handle_tool("bottom_drawer", DRAWER_TRAVEL)[0][:2])
+        lo, hi = samplers.DRAWER_BEARING
+        drawn = []
+        near = ks._sample_base_near
+
+        def record(target, r_range, bearing):
+            base = near(target, r_range, bearing)
+            drawn.append(base)
+            return base
+
+        ks._sample_base_near = record
+        bases = [b for (b,), _ in zip(ks.sample_drawer_base("bottom_drawer"), range(2))]
+        assert len(bases) == 2 and len(drawn) >= 8
+        bearings = []
+        for base in drawn:
+            away = handle - np.asarray(mount_position(base))[:2]
+            bearings.append(math.atan2(away[1], away[0]))
+            assert lo - 0.05 <= abs(bearings[-1]) <= hi + 0.05, bearings[-1]
+        assert [b > 0 for b in bearings[:8]] == [True, True, True, False] * 2
+        for base in bases:
+            assert ks.plan_drawer("bottom_drawer", 0.0, DRAWER_TRAVEL, base) is not None
     finally:
         task.close()
 
