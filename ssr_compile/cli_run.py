@@ -83,6 +83,14 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "--max-cycles", type=_count, default=100, metavar="N", help="at most N cycles (default 100)"
     )
     p.add_argument("--planner", default="fd", metavar="NAME", help="planner backend (default fd)")
+    p.add_argument(
+        "--resample",
+        type=_count,
+        default=None,
+        metavar="N",
+        help="the solver draws a rejected draw again at once up to N times per stream plan "
+        "(default 2; 0: off, the Focused loop as the paper has it)",
+    )
     p.add_argument("--log", metavar="FILE.jsonl", help="write one JSON line per cycle to FILE")
     p.add_argument("--gif", metavar="FILE", help="an animation of the episode (kitchen tasks)")
     p.add_argument("--json", action="store_true", help="print the outcome as JSON (no cycle lines)")
@@ -116,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
         unconstrained_time=args.unconstrained_time,
         max_cycles=args.max_cycles,
         planner=args.planner,
+        **({} if args.resample is None else {"resample": args.resample}),
     )
     from .planners import get_planner
 

@@ -36,7 +36,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .errors import InstanceCapReached, TimeLimitReached
-from .focused import ReplanState, Solution, Statistics, Step, solve, with_kept
+from .focused import RESAMPLE, ReplanState, Solution, Statistics, Step, solve, with_kept
 from .limits import overrunning_stream, time_limit
 from .stream import StreamsModule
 
@@ -149,6 +149,8 @@ class PolicySettings:
     # Cook seed 1 gave up at level 8 after 40 s of its 600 s budget.
     unconstrained_max_level: int = 12
     max_cost: float = math.inf  # c*: plans must be cheaper
+    # the solver's draws again at once of a rejected or failed draw (``solve``'s resample)
+    resample: int = RESAMPLE
     # Measurement only (bench/policy_bench.py): when a constrained attempt holds, also solve
     # the same problem without constraints and record its time (not counted, not used).
     compare_unconstrained: bool = False
@@ -164,6 +166,8 @@ class PolicySettings:
                 raise ValueError(f"{name} must be a positive number of seconds, got {v}")
         if self.max_cycles < 1:
             raise ValueError(f"max_cycles must be at least 1, got {self.max_cycles}")
+        if self.resample < 0:
+            raise ValueError(f"resample must be 0 or more, got {self.resample}")
 
     @property
     def constraints(self) -> bool:
@@ -377,6 +381,7 @@ def run_policy(
                             initial_level=first,
                             max_level=max_level,
                             progress=progress,
+                            resample=settings.resample,
                             **kw,
                         )
                 except InstanceCapReached as e:
@@ -465,6 +470,7 @@ def run_policy(
                             defer=settings.defer,
                             initial_level=settings.initial_level,
                             max_level=settings.max_level,
+                            resample=settings.resample,
                         )
                         comparison = other.stats.total_time if other.solved else None
                 else:

@@ -7,6 +7,7 @@ assertions are exact on a fixed set of seeds.
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 from ssr_compile.streams import belief_detect, progress
@@ -71,13 +72,24 @@ def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
 def test_without_plan_constraints_replanning_moves_the_base_again_and_again():
     motions = {}
     for seed in SEEDS:
-        episode, result = _progress(seed, "neither")
+        episode, result = _progress(seed, "neither", resample=0)
         motions[seed] = episode.environment.base_motions
         assert result.constrained_held == 0
     # The paper's oscillation: after a noisy move, a failed IK restart from the reached pose
-    # sends the unconstrained solver to a fresh base pose.
+    # sends the unconstrained solver (the Focused loop as the paper has it) to a fresh base pose.
     assert sum(motions.values()) >= len(SEEDS) + 5, motions
     assert max(motions.values()) >= 3, motions
+
+
+def test_drawing_the_failed_ik_again_at_once_removes_that_oscillation():
+    # With the solver's default resample, the IK restart that failed from the reached pose is
+    # drawn again within the same stream plan: the base hardly moves twice, even unconstrained.
+    motions = {}
+    for seed in SEEDS:
+        episode, result = _progress(seed, "neither")
+        motions[seed] = episode.environment.base_motions
+        assert result.success, (seed, result.reason)
+    assert sum(motions.values()) <= len(SEEDS) + 2, motions
 
 
 def test_the_robot_picks_from_the_pose_it_reached_not_the_one_it_aimed_for():
@@ -132,7 +144,9 @@ def test_constant_facts_keep_only_static_facts_over_constants_and_their_values()
     episode = progress.make_episode(None, 0)
     agent = episode.agent
     problem, module = agent.problem()
-    solution = solve(agent.domain, agent.streams, problem, module, defer=True)
+    # without draws again at once, the solver samples a grasp on the way that the plan does
+    # not use (the case at hand)
+    solution = solve(agent.domain, agent.streams, problem, module, defer=True, resample=0)
     assert solution.solved
     grasps = {
         o for r in solution.evaluated if r.instance.stream == "sample-grasp" for o in r.outputs
@@ -178,19 +192,25 @@ def test_belief_detect_reaches_the_goal_in_the_true_world():
         assert any(a.startswith("(move-aside") for a in result.actions[:first_detect])
 
 
+def _behind(belief: str) -> dict[str, float]:
+    return {k: float(v) for k, v in re.findall(r"behind ([AB]) ([0-9.]+)", belief)}
+
+
 def test_a_miss_shifts_the_belief_and_the_tail_falls_back_to_the_other_box():
-    result = _detect(2)
+    result = _detect(0)
     actions = result.actions
-    assert actions[0].startswith("(move-aside boxb")
-    assert "missed" in result.cycles[1].belief  # the detection behind B found nothing
-    # After the miss the mass moved behind A (0.45 -> more than 0.5) ...
-    before = result.cycles[0].belief
-    after = result.cycles[1].belief
-    assert "behind A 0.45" in before and "behind A 0.5" in after
-    # ... the old tail [detect behind B, pick] is impossible now: constrained attempt fails,
-    # the unconstrained plan moves the other box.
+    assert actions[0].startswith("(move-aside box")
+    first = actions[0].split()[1][-1].upper()  # the box moved first: A or B
+    other = "B" if first == "A" else "A"
+    assert "missed" in result.cycles[1].belief  # the detection behind it found nothing
+    # After the miss the mass moved from behind that box to behind the other (0.45 -> over 0.5)
+    before, after = _behind(result.cycles[0].belief), _behind(result.cycles[1].belief)
+    assert before == {"A": 0.45, "B": 0.45}
+    assert after[first] < 0.2 and after[other] > 0.5
+    # ... the old tail [detect behind the first box, pick] is impossible now: the constrained
+    # attempt fails, the unconstrained plan moves the other box.
     assert result.cycles[2].constrained == "fell back"
-    assert actions[2].startswith("(move-aside boxa")
+    assert actions[2].startswith(f"(move-aside box{other.lower()}")
     assert result.success
 
 
@@ -215,7 +235,9 @@ def test_environment_never_exposes_truth_to_the_agent():
 
 def test_run_command_exit_codes_and_log(tmp_path, capsys):
     log = tmp_path / "trace.jsonl"
-    assert main(["run", "progress", "--seed", "5", "--variant", "neither", "--log", str(log)]) == 0
+    # the §VI oscillation, with the Focused loop as the paper has it (no draws again at once)
+    args = ["run", "progress", "--seed", "5", "--variant", "neither", "--resample", "0"]
+    assert main([*args, "--log", str(log)]) == 0
     out = capsys.readouterr().out
     assert "the goal holds in the true state" in out
     lines = [json.loads(x) for x in log.read_text().splitlines()]
