@@ -148,8 +148,8 @@ class _Evaluation:
             raise StreamFailure(res.instance.stream, e.message) from e
 
     def _evaluate(self, res: Result, binding: dict[str, str]) -> bool:
-        inputs = tuple(binding.get(x, x) for x in res.instance.inputs)
-        inst = Instance(res.instance.stream, inputs, res.instance.kind)
+        inst = _bound(res, binding)
+        inputs = inst.inputs
         # Optimistic inputs bound to real values may coincide with an instance evaluated
         # before: reuse its outcome instead of asking an exhausted generator (or a
         # deterministic test, or a function) again and calling the plan a failure.
@@ -222,6 +222,12 @@ class _Evaluation:
             stats.successes += 1
         else:
             stats.failures += 1
+
+
+def _bound(res: Result, binding: dict[str, str]) -> Instance:
+    """``res``'s stream instance with its optimistic inputs bound to their real names."""
+    inst = res.instance
+    return Instance(inst.stream, tuple(binding.get(y, y) for y in inst.inputs), inst.kind)
 
 
 def _real_result(
@@ -859,12 +865,7 @@ class _FocusedLoop:
                 continue
             if again.get(id(r), 0) >= limit:
                 continue
-            real = Instance(
-                r.instance.stream,
-                tuple(binding.get(y, y) for y in r.instance.inputs),
-                r.instance.kind,
-            )
-            if real not in self.ev.exhausted and all(x is not r for x in out):
+            if _bound(r, binding) not in self.ev.exhausted and all(x is not r for x in out):
                 out.append(r)
         return out
 
@@ -877,11 +878,7 @@ class _FocusedLoop:
             producer = inst.get(x)
             if producer is None or producer.instance.kind != "stream":
                 continue
-            real = Instance(
-                producer.instance.stream,
-                tuple(binding.get(y, y) for y in producer.instance.inputs),
-                producer.instance.kind,
-            )
+            real = _bound(producer, binding)
             if real in self.ev.exhausted or real not in self.ev.tried:
                 continue
             count = self.redraws.get(real, 0)
