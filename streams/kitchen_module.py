@@ -598,6 +598,19 @@ class KitchenModule:
         d = np.linalg.norm(pb2.poses[:, :2] - x[:2], axis=1)
         return float(pb2.weights[same & (d < r)].sum()) <= EPS
 
+    def test_afree(self, bq, aq, o2: str, pb2: PoseBelief) -> bool:
+        """The robot at base ``bq`` with its arm at ``aq`` is clear of ``o2`` where the belief
+        ``pb2`` puts it (a localized belief, at its estimate; another is no obstacle, as for
+        :meth:`plan_arm_motion`).  The configuration the arm is in now is clear: it is there."""
+        if not is_localized(pb2) or (self.arm_now is not None and _same(aq, self.arm_now)):
+            return True
+        p = self.obj_pose(pb2)
+        with self.planning() as w:
+            w.place_object(o2, p.surface, p.rel)
+            w.set_base(bq)
+            w.set_arm(aq)
+            return not w._pair(w.robot.body, w.objects[o2])
+
     def obscost(self, o: str, pb: PoseBelief, obs: Observation) -> float | None:
         if not o == pb.obj == obs.obj:
             return None
@@ -632,6 +645,7 @@ class KitchenModule:
             "test-vis": self.test_vis,
             "test-vis-robot": self.test_vis_robot,
             "test-cfree": self.test_cfree,
+            "test-afree": self.test_afree,
             "obscost": self.obscost,
         }
 
@@ -663,6 +677,7 @@ STREAM_INFO = {
     "test-vis": StreamInfo(kind="test", p_success=0.7, cost=0.2),
     "test-vis-robot": StreamInfo(kind="test", p_success=0.5, cost=0.2),
     "test-cfree": StreamInfo(kind="test", p_success=0.9, cost=0.01),
+    "test-afree": StreamInfo(kind="test", p_success=0.9, cost=0.05),
     # planned with before evaluation: c, the cheapest any detection can be (p = 1)
     "obscost": StreamInfo(optimistic_value=C_DETECT),
 }

@@ -79,3 +79,38 @@ def test_cfree_refuses_a_placement_on_top_of_another_object(cook):
     assert module.streams["test-cfree"]("block", far, "sugar_box", sugar) is True
     # an object never collides with itself
     assert module.streams["test-cfree"]("block", on_it, "block", on_it) is True
+
+
+def test_afree_refuses_an_arm_configuration_inside_another_object(cook):
+    """``test-afree`` (so ``armblocked``, in pick and place): the pre-grasp of the block is
+    refused with the sugar box believed where the hand would be, and allowed with the box
+    elsewhere or with the arm already there (the robot is at that configuration: it is free)."""
+    task, module = cook
+    block = _point(task, "block")
+    grasps = [g for (g,) in module.streams["sample-grasp"]("block")]
+    found = None
+    for g in grasps:
+        bases = module.streams["inv-reach"]("block", block, g)
+        for _ in range(12):
+            (bq,) = next(bases) or (None,)
+            if bq is None:
+                continue
+            out = module.streams["inv-kin"]("block", block, g, bq)
+            if out is not None:
+                found = bq, out[0]
+                break
+        if found:
+            break
+    assert found, "no base and pre-grasp for the block in 12 draws per grasp"
+    bq, aq = found
+    hand = task.world.robot.forward_kinematics(bq, aq)[0]
+    sugar_at_hand = _point(task, "sugar_box", (hand[0], hand[1]))
+    test = module.streams["test-afree"]
+    assert test(bq, aq, "sugar_box", sugar_at_hand) is False
+    sugar = _point(task, "sugar_box", (hand[0], hand[1] + 0.6))
+    assert test(bq, aq, "sugar_box", sugar) is True
+    module.module.arm_now = tuple(aq)
+    try:
+        assert test(bq, aq, "sugar_box", sugar_at_hand) is True
+    finally:
+        module.module.arm_now = None

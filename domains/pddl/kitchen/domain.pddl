@@ -35,11 +35,13 @@
     (bvis ?o ?obs ?o2 ?pb2)           ; ?o2 at ?pb2 leaves ?obs's region visible (paper §IV-A)
     (bvisrobot ?o ?obs ?bq)           ; so does the robot at ?bq with its arm stowed
     (cfree ?o ?pb ?o2 ?pb2)
+    (afree ?bq ?aq ?o2 ?pb2)          ; the arm at ?aq (base ?bq) is clear of ?o2 at ?pb2
     ; fluents
     (atconf ?r ?q) (atangle ?d ?a) (handempty) (atgrasp ?o ?g) (atposeb ?o ?pb)
     (cooked ?o) (stoveon)
     ; derived
     (boccluded ?o ?obs) (armstowed) (accessible ?o ?pb) (blocked ?d) (covered ?d) (unsafe ?o ?pb)
+    (armblocked ?o ?bq ?aq)
     (on ?o ?s))
   (:functions (obscost ?o ?pb ?obs) (total-cost) - number)
 
@@ -89,6 +91,16 @@
       (and (poseb ?o ?pb) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
            (not (cfree ?o ?pb ?o2 ?pb2)))))
 
+  ; the arm configuration from which ?o is picked or placed may be inside another object at
+  ; its current belief (the approach starts there; inv-kin checks only what the robot put
+  ; down itself, as plans often move the rest first -- Cook seed 2 drove between bases near
+  ; the block some 50 times, the block's pre-grasp inside the sugar box from each, until the
+  ; planner could see why and move the box first or grasp from elsewhere)
+  (:derived (armblocked ?o ?bq ?aq)
+    (exists (?o2 ?pb2)
+      (and (graspable ?o) (reach ?bq ?aq) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
+           (not (afree ?bq ?aq ?o2 ?pb2)))))
+
   ; the robot believes ?o is on ?s, precisely enough to act on it
   (:derived (on ?o ?s)
     (exists (?pb) (and (atposeb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s))))
@@ -109,14 +121,16 @@
   (:action pick
     :parameters (?o ?pb ?g ?bq ?aq ?t)
     :precondition (and (kin ?o ?pb ?g ?bq ?aq ?t) (atposeb ?o ?pb) (handempty)
-                       (accessible ?o ?pb) (atconf base ?bq) (atconf arm ?aq))
+                       (accessible ?o ?pb) (not (armblocked ?o ?bq ?aq))
+                       (atconf base ?bq) (atconf arm ?aq))
     :effect (and (atgrasp ?o ?g) (not (atposeb ?o ?pb)) (not (handempty))
                  (increase (total-cost) 1)))
 
   (:action place
     :parameters (?o ?pb ?g ?bq ?aq ?t)
     :precondition (and (kin ?o ?pb ?g ?bq ?aq ?t) (atgrasp ?o ?g) (accessible ?o ?pb)
-                       (not (unsafe ?o ?pb)) (atconf base ?bq) (atconf arm ?aq))
+                       (not (unsafe ?o ?pb)) (not (armblocked ?o ?bq ?aq))
+                       (atconf base ?bq) (atconf arm ?aq))
     :effect (and (atposeb ?o ?pb) (handempty) (not (atgrasp ?o ?g))
                  (increase (total-cost) 1)))
 

@@ -171,6 +171,12 @@
     :inputs (?o ?pb ?o2 ?pb2)
     :domain (and (localized ?o ?pb) (poseb ?o2 ?pb2))
     :certified (cfree ?o ?pb ?o2 ?pb2))
+  ; the arm at ?aq, base at ?bq, is clear of ?o2 under ?pb2 (a localized belief, at its
+  ; estimate; any other belief is not an obstacle, as for the motion streams)
+  (:stream test-afree
+    :inputs (?bq ?aq ?o2 ?pb2)
+    :domain (and (reach ?bq ?aq) (poseb ?o2 ?pb2))
+    :certified (afree ?bq ?aq ?o2 ?pb2))
   ; paper §V: self-loop determinized cost of detect, from the lower bound of eq. 2
   (:function (obscost ?o ?pb ?obs)
     (and (poseb ?o ?pb) (obs ?o ?obs))))
