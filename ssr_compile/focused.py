@@ -515,6 +515,9 @@ class _FocusedLoop:
         if accept_drawn is None:
             accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
         self.accept_drawn = accept_drawn
+        # the cheapest plan so far whose stream plan all succeeded (with its values drawn),
+        # kept when not taken at once (``accept_drawn`` off): see :meth:`use_plan`
+        self.incumbent: Solution | None = None
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
         self.eager = {
             f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
@@ -530,7 +533,7 @@ class _FocusedLoop:
         is left up to the last level, or time is up."""
         while True:
             if time.monotonic() >= self.deadline:
-                return self.finish(
+                return self.incumbent_or(
                     "timeout", message=f"time limit of {self.time_limit:g} s reached"
                 )
             self.stats.iterations += 1
@@ -544,7 +547,7 @@ class _FocusedLoop:
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)
             if result.status == "timeout":
-                return self.finish(
+                return self.incumbent_or(
                     "timeout", message=f"the planner ran out of time at level {self.level}"
                 )
             if result.status != "solved":
@@ -565,6 +568,19 @@ class _FocusedLoop:
             message=f"no plan found up to level {self.level - 1} in {took:.1f} s; "
             f"level {self.level} would pass the cap ({e.message})",
         )
+
+    def incumbent_or(self, status: str, message: str) -> Solution:
+        """Out of time: the incumbent plan (see :meth:`use_plan`) when there is one, else
+        ``status`` with ``message``."""
+        if self.incumbent is None:
+            return self.finish(status, message=message)
+        self.say(f"  {message}: the cheapest plan drawn so far")
+        return self.finish_incumbent()
+
+    def finish_incumbent(self) -> Solution:
+        sol = self.incumbent
+        assert sol is not None
+        return self.finish(SOLVED, sol.plan, sol.cost, sol.certificate)
 
     def finish(self, status, plan=None, cost=None, certificate=(), deferred=(), message=""):
         self.stats.total_time = time.monotonic() - self.start
@@ -691,6 +707,13 @@ class _FocusedLoop:
         inst = compiled.instantiation
         needed = stream_plan(inst, pre, plan) if inst else []
         cost = (result.cost or 0.0) / compiled.scale
+        if self.incumbent is not None and cost >= self.incumbent.cost - 1e-9:
+            # Optimistic costs are lower bounds: this plan costs at least what the incumbent
+            # costs.  (A suboptimal planner, asked again after a stream plan that all
+            # succeeded, often answers with another plan of the same cost over other
+            # optimistic motions: tamp2d with 6 blocks evaluated such plans until its limit.)
+            self.say("  no cheaper than the plan drawn before: taken")
+            return self.finish_incumbent()
         if not needed:
             return self.finish(
                 SOLVED, _steps(plan, self.values, set()), cost, sorted(pre.static_facts, key=str)
@@ -709,9 +732,13 @@ class _FocusedLoop:
         self.compiled_objects = inst.objects
         self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
         done = self.evaluate_stream_plan(ordered, inst.shared)
-        usable = self.accept_drawn and self.stream_plan_ok and not later and not inst.shared
+        usable = self.stream_plan_ok and not later and not inst.shared
         if done is None and usable:
-            done = self.bound_solution(compiled, plan, inst)
+            found = self.bound_solution(compiled, plan, inst)
+            if found is not None and self.accept_drawn:
+                return found
+            if found is not None and (self.incumbent is None or found.cost < self.incumbent.cost):
+                self.incumbent = found  # a suboptimal planner may still find a cheaper plan
         return done
 
     def bound_solution(self, compiled, plan, inst) -> Solution | None:
@@ -737,7 +764,10 @@ class _FocusedLoop:
             return None
         if not cost <= planned + 1e-9 or cost > self.max_cost:
             return None
-        self.say("  the plan holds with the values drawn")
+        self.say(
+            "  the plan holds with the values drawn"
+            + ("" if self.accept_drawn else f" (cost {cost:g}; kept, planning again)")
+        )
         return self.finish(
             SOLVED, _steps(bound, self.values, set()), cost, sorted(pre.static_facts, key=str)
         )

@@ -287,11 +287,57 @@ def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_d
         accept_drawn=True,
     )
     assert [str(x) for x in again.plan] == [str(x) for x in sol.plan] and again.cost == sol.cost
-    # by default only a cost-optimal planner's plan is taken as drawn (fd's is not)
+    # by default only a cost-optimal planner's plan is taken as drawn at once (fd's is not): it
+    # is kept, the solver plans again, and takes it when the next plan is no cheaper
     said.clear()
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
-    solve(d, s, p, module, progress=said.append)
-    assert not any("holds with the values drawn" in line for line in said)
+    default = solve(d, s, p, module, progress=said.append)
+    lines = [line.strip() for line in said]
+    kept = lines.index("the plan holds with the values drawn (cost 6; kept, planning again)")
+    assert lines[kept + 1].startswith("iteration ")
+    assert lines[-1] == "no cheaper than the plan drawn before: taken"
+    assert default.stats.planner_calls == sol.stats.planner_calls + 1
+    assert [str(x) for x in default.plan] == [str(x) for x in sol.plan]
+    assert default.cost == sol.cost
+
+
+def test_out_of_time_after_a_plan_was_drawn_the_solver_returns_that_plan():
+    # the progress example's third plan holds with its values drawn and is kept (fd is not
+    # cost-optimal); the planner then runs out of time: the kept plan is the answer, not
+    # "timeout"
+    from ssr_compile.planners import get_planner
+    from ssr_compile.planners.base import PlanResult
+    from ssr_compile.stream import module_for_problem
+
+    folder = Path(__file__).parent.parent / "domains" / "pddl" / "progress"
+    d = parse_domain((folder / "domain.pddl").read_text())
+    s = parse_stream_file((folder / "stream.pddl").read_text())
+    p = parse_problem((folder / "problem.pddl").read_text())
+
+    class ThreeCalls:
+        def __init__(self):
+            self.fd = get_planner("fd")
+            self.name, self.capabilities, self.calls = "fd", self.fd.capabilities, 0
+
+        def solve(self, domain, problem, time_limit=None, cost_bound=None):
+            self.calls += 1
+            if self.calls > 3:
+                return PlanResult("timeout", None, None, time_limit or 0.0, self.name)
+            return self.fd.solve(domain, problem, time_limit=time_limit, cost_bound=cost_bound)
+
+    said: list[str] = []
+    module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
+    sol = solve(d, s, p, module, planner=ThreeCalls(), progress=said.append)
+    assert sol.status == "solved", sol.message
+    assert sol.stats.planner_calls == 4
+    assert said[-1].strip().endswith("the cheapest plan drawn so far")
+    assert [str(x) for x in sol.plan] == ["(move-base q0 t-3 q-2)", "(pick d p-d g-1 q-2 aq-4)"]
+    assert sol.cost == 6
+    # without a plan drawn before, running out of time stays a timeout
+    module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
+    planner = ThreeCalls()
+    planner.calls = 2
+    assert solve(d, s, p, module, planner=planner).status == "timeout"
 
 
 def test_rejected_draws_are_redrawn_at_their_level_and_the_plan_simulates():
