@@ -93,23 +93,27 @@ def _fit_to_engine(task, engine_cls):
 
     map_backs = []
     supported = engine_cls.supported_kind().features
+    # ``Problem.kind`` walks the whole task at every access (40 ms on tamp2d's blocked
+    # problem, read 10 times here per call): once per task
+    task_kind = task.kind
     steps = [
         getattr(CompilationKind, name)
         for name, features in _COMPILERS
-        if any(f in task.kind.features and f not in supported for f in features)
+        if any(f in task_kind.features and f not in supported for f in features)
     ]
     steps.append(CompilationKind.GROUNDING)  # last resort: equality, for instance
     for kind in steps:
-        if engine_cls.supports(task.kind):
+        if engine_cls.supports(task_kind):
             break
         try:
-            with Compiler(problem_kind=task.kind, compilation_kind=kind) as compiler:
+            with Compiler(problem_kind=task_kind, compilation_kind=kind) as compiler:
                 res = compiler.compile(task, kind)
         except UPException:
             # No compiler takes this task (undefined static cost values, say): let the engine
             # try it as it is, which is what it would have been given without this step.
             break
         task = res.problem
+        task_kind = task.kind
         map_backs.insert(0, res.map_back_action_instance)
     return task, map_backs
 
