@@ -47,7 +47,7 @@ def test_files_round_trip(name):
     assert parse_text(to_text(tree), name) == tree
 
 
-def optimistic_plan(files, task_name: str, level: int):
+def optimistic_plan(files, task_name: str, level: int, with_problem: bool = False):
     domain, streams = files
     task = make_task(task_name, 0)
     try:
@@ -58,7 +58,8 @@ def optimistic_plan(files, task_name: str, level: int):
         compiled = compile_problem(domain, streams, problem, level=level)
         result = get_planner("fd").solve(compiled.domain, compiled.problem, time_limit=30)
         assert result.status == "solved", result.message
-        return compiled.map_plan(result.actions or [])
+        plan = compiled.map_plan(result.actions or [])
+        return (plan, compiled) if with_problem else plan
     finally:
         task.close()
 
@@ -108,6 +109,22 @@ def test_cook_detects_picks_places_and_presses(files):
     assert [a for _, a in sk[:3]] == ["block"] * 3
     place = next(a for n, a in plan if n == "place")
     assert place[1] != "pb-block"  # a new, known pose: a stove placement (goal: cooked)
+
+
+def test_a_pick_rests_on_the_arm_clear_of_every_other_object(files):
+    # (not (armblocked ...)) in pick: the plan's preimage needs an afree test of the pick's
+    # arm configuration against each other object at its belief (so the stream plan checks
+    # them), and none against the object picked
+    from ssr_compile.preimage import plan_preimage
+
+    plan, compiled = optimistic_plan(files, "cook", 5, with_problem=True)
+    pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
+    i = next(i for i, (n, _) in enumerate(plan) if n == "pick")
+    o, _pb, _g, bq, aq, _t = plan[i][1]
+    tested = {f.args[2].name for f in pre.per_step[i] if f.pred == "afree"}
+    assert all(f.args[0].name == bq and f.args[1].name == aq
+               for f in pre.per_step[i] if f.pred == "afree")  # fmt: skip
+    assert tested == {"cracker_box", "sugar_box"} and o == "block"
 
 
 def test_focused_solves_inspect_and_the_first_action_runs(files):
