@@ -241,8 +241,8 @@ def test_run_command_exit_codes_and_log(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "the goal holds in the true state" in out
     lines = [json.loads(x) for x in log.read_text().splitlines()]
-    assert len(lines) == 7 and lines[-1]["action"] is None
-    assert sum(x["action"].startswith("(move-base") for x in lines if x["action"]) == 5
+    assert len(lines) == 6 and lines[-1]["action"] is None
+    assert sum(x["action"].startswith("(move-base") for x in lines if x["action"]) == 4
     assert main(["run", "progress", "--max-cycles", "1"]) == 1
     assert "does NOT hold" in capsys.readouterr().out
     assert main(["run", "tamp2d"]) == 2
