@@ -737,8 +737,10 @@ class _FocusedLoop:
             found = self.bound_solution(compiled, plan, inst)
             if found is not None and self.accept_drawn:
                 return found
-            if found is not None and (self.incumbent is None or found.cost < self.incumbent.cost):
-                self.incumbent = found  # a suboptimal planner may still find a cheaper plan
+            if found is not None:
+                # cheaper than any kept before (a plan no cheaper was not evaluated, above);
+                # a suboptimal planner may still find a cheaper one
+                self.incumbent = found
         return done
 
     def bound_solution(self, compiled, plan, inst) -> Solution | None:

@@ -604,12 +604,8 @@ class KitchenModule:
         :meth:`plan_arm_motion`).  The configuration the arm is in now is clear: it is there."""
         if not is_localized(pb2) or (self.arm_now is not None and _same(aq, self.arm_now)):
             return True
-        p = self.obj_pose(pb2)
-        with self.planning() as w:
-            w.place_object(o2, p.surface, p.rel)
-            w.set_base(bq)
-            w.set_arm(aq)
-            return not w._pair(w.robot.body, w.objects[o2])
+        with self.planning():
+            return self.ks.test_cfree_traj_pose(bq, (aq,), o2, self.obj_pose(pb2))
 
     def obscost(self, o: str, pb: PoseBelief, obs: Observation) -> float | None:
         if not o == pb.obj == obs.obj:
