@@ -65,6 +65,10 @@ def _grasp_from_tool(tool_in_obj: Pose) -> Pose:
 # Radians (max over the joints) around an arm configuration the robot is in but the planning
 # world says collides, within which a motion leaving it is not collision-checked.
 ESCAPE = 0.15
+# Metres: an obstacle this near the arm (or what it holds) where a motion starts is left, not
+# approached, within ESCAPE of the start -- by more than LEAVE_TOL (see plan_arm_motion).
+NEAR = 0.03
+LEAVE_TOL = 0.001
 # A side grasp whose hand would move in along a bearing further than this from +x (the way the
 # robot faces the counter and the drawers) is out of the arm's reach from every base: 0 of 400
 # sampled bases reached one on Cook seeds 0-2 (1.86 to 2.97 rad), against 12-80% of the
@@ -405,25 +409,42 @@ class KitchenStreams:
         self, base: Conf, q1: Conf, q2: Conf, blocked: Callable[[np.ndarray], bool] | None = None
     ) -> tuple[tuple[Conf, ...]] | None:
         """Function stream ``motion`` (arm): an RRT-Connect path ``q1 -> q2`` at ``base``,
-        collision-free against the world, open drawers and the held object.  When ``q1`` itself
-        collides (the arm stopped where the world as estimated puts an object it did not
-        touch), the path may leave it: configurations within :data:`ESCAPE` of ``q1`` are not
-        checked -- else no motion ever starts there, and a replan has no way out (Cook seed 3:
-        "no relaxed solution" after an arm motion stopped short of the block).  ``blocked``:
-        configurations to treat as colliding besides (what the true world refused)."""
+        collision-free against the world, open drawers and the held object.
+
+        Within :data:`ESCAPE` of ``q1`` the path leaves what the arm is near: it comes no
+        closer to an obstacle within :data:`NEAR` of it at ``q1`` than it is there (the world is
+        an estimate; the true object may be a centimetre nearer: Cook seed 3 without plan
+        constraints opened the gripper after a placement 1 mm from the true sugar box, and every
+        motion planned past the estimated box hit the true one at its first waypoint).  When
+        ``q1`` itself collides (the arm stopped where the estimate puts an object it did not
+        touch), the path may leave it, no deeper, and is not checked otherwise there -- else no
+        motion ever starts there ("no relaxed solution" after an arm motion stopped short of
+        the block).  ``blocked``: configurations to treat as colliding besides (what the true
+        world refused)."""
         w = self.world
         r = w.robot
         with w.saved():
             w.set_base(base)
             check = self._arm_collision_fn(base)
             start = np.asarray(q1, float)
-            escape = check(start)
+            stuck = check(start)
+            w.set_arm(start)
+            near = w.robot_clearances(NEAR)
+
+            def leaving(q: np.ndarray) -> bool:
+                w.set_arm(q)
+                now = w.robot_clearances(NEAR)
+                return all(now.get(b, NEAR) >= d0 - LEAVE_TOL for b, d0 in near.items())
 
             def collision(q: np.ndarray) -> bool:
-                if blocked is not None and blocked(np.asarray(q, float)):
+                q = np.asarray(q, float)
+                if blocked is not None and blocked(q):
                     return True
-                if escape and float(np.max(np.abs(np.asarray(q, float) - start))) <= ESCAPE:
-                    return False
+                if (stuck or near) and float(np.max(np.abs(q - start))) <= ESCAPE:
+                    if not leaving(q):
+                        return True
+                    if stuck:
+                        return False
                 return check(q)
 
             path = rrt_connect(

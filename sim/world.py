@@ -510,6 +510,21 @@ class World:
                 return True
         return False
 
+    def robot_clearances(self, reach: float, ignore: Iterable[str] = ()) -> dict[int, float]:
+        """The smallest signed distance (negative: penetration) from the robot, or what it
+        holds, to each obstacle closer than ``reach``, by body (robot against its own base
+        excluded; see :meth:`robot_collision`)."""
+        out: dict[int, float] = {}
+        movers = [self.robot.body]
+        if self.held is not None:
+            movers.append(self.objects[self.held.obj])
+        for body in self.obstacles(ignore):
+            for m in movers:
+                for pt in p.getClosestPoints(m, body, reach, physicsClientId=self.client):
+                    if pt[8] < out.get(body, reach):
+                        out[body] = pt[8]
+        return out
+
     def robot_contacts(self) -> list[str]:
         """What the robot (or what it holds) touches now, by name (for messages)."""
         names = {self.floor: "floor", self.counter: "counter", self.stove: "stove"}

@@ -246,3 +246,53 @@ def test_an_arm_motion_may_leave_a_configuration_the_estimated_world_says_collid
         assert ks.plan_arm_motion(base, ARM_TUCK, ARM_CARRY) is None
     finally:
         task.close()
+
+
+def test_an_arm_motion_starting_near_an_object_leaves_it_first(monkeypatch):
+    # The world is an estimate: where the arm starts a centimetre from an object, the true one
+    # may touch it.  Near the start the path must not come closer to it (Cook seed 3 without
+    # plan constraints: after a placement beside the sugar box, every motion planned past the
+    # estimated box hit the true one at its first waypoint, until no plan was left).
+    import ssr_compile.sim.samplers as samplers
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.sim.tasks import make_task
+
+    task = make_task("cook", 0)
+    try:
+        w = task.world
+        base = w.robot.get_base()
+        start, goal = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
+        w.set_arm(start + 0.1 * (goal - start))
+        ahead = np.asarray(w.robot.tool_pose()[0])
+        w.set_arm(start)
+        hand = np.asarray(w.robot.tool_pose()[0])
+        way = (ahead - hand) / np.linalg.norm(ahead - hand)
+        block = w.objects["block"]
+        counter = invert(w.surface_frame("counter"))
+        d0 = None
+        for off in np.arange(0.02, 0.3, 0.005):  # the block in the hand's way, ~1 cm from it
+            at = (tuple(hand + off * way), (0.0, 0.0, 0.0, 1.0))
+            w.place_object("block", "counter", multiply(counter, at))
+            d0 = w.robot_clearances(0.05).get(block)
+            if d0 is not None and 0.008 < d0 < 0.015:
+                break
+        assert d0 is not None and 0.008 < d0 < 0.015
+
+        def clearances(near: float) -> list[float]:
+            monkeypatch.setattr(samplers, "NEAR", near)
+            ks = samplers.KitchenStreams(w, np.random.default_rng(0))
+            out = ks.plan_arm_motion(base, ARM_TUCK, ARM_CARRY)
+            assert out is not None
+            got = []
+            for q in out[0]:
+                if np.max(np.abs(np.asarray(q) - start)) <= samplers.ESCAPE:
+                    w.set_arm(q)
+                    got.append(w.robot_clearances(0.05).get(block, 0.05))
+            w.set_arm(start)
+            return got
+
+        assert min(clearances(samplers.NEAR)) >= d0 - samplers.LEAVE_TOL
+        # without the rule, the planned path moves the hand on towards the block
+        assert min(clearances(0.0)) < d0 - 0.003
+    finally:
+        task.close()
