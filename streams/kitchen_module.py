@@ -405,6 +405,15 @@ class KitchenModule:
                 # a motion planned with the hand empty towards the pick, reversed, 90 times).
                 o, g = self.holding
                 w.held = Held(o, g.pose)
+                # ... unless its far end cannot be reached with the object in hand: then the
+                # plan takes it after putting the object down, from a named configuration
+                # the arm happens to be in now (carry).  Stow without deferral held the sugar
+                # box at carry, and every motion from carry to a grasp of the block, checked
+                # with the box in hand, failed, until no plan was left (6 of 12 episodes).
+                w.set_base(bq)
+                w.set_arm(q1 if reverse else q2)
+                if w.robot_collision():
+                    w.held = None
             # RRT-Connect may miss a path that exists; a function fails for the whole solve,
             # and with the arm where it is, no other motion may be left (Cook seed 3 ended
             # "no relaxed solution" on one miss, with a path there on the next try).

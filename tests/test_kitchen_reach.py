@@ -3,8 +3,8 @@ where a noisy base motion lands, side grasps no base reaches, grasps reached at 
 believed pose tried first, and arm paths that start where the arm is although the object's
 estimate moved a little."""
 
-import math
 import itertools
+import math
 
 import numpy as np
 import pytest

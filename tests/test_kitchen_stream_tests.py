@@ -114,3 +114,64 @@ def test_afree_refuses_an_arm_configuration_inside_another_object(cook):
         assert test(bq, aq, "sugar_box", sugar_at_hand) is True
     finally:
         module.module.arm_now = None
+
+
+def test_an_arm_motion_from_carry_to_a_grasp_is_planned_for_after_the_held_object_is_down(
+    cook, monkeypatch
+):
+    """The robot holds the sugar box at carry.  A motion from carry the robot may take next is
+    checked with the box in hand; one whose end the arm cannot reach with the box in hand (the
+    block's pre-grasp) is taken after the box is put down, and is planned without it.  Stow
+    without deferral: every motion from carry to a grasp of the block, checked with the box
+    in hand, failed, until no plan was left."""
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.sim.world import Held
+
+    task, module = cook
+    km = module.module
+    block = _point(task, "block")
+    found = None
+    for (g,) in module.streams["sample-grasp"]("block"):
+        bases = module.streams["inv-reach"]("block", block, g)
+        for _ in range(12):
+            (bq,) = next(bases) or (None,)
+            out = None if bq is None else module.streams["inv-kin"]("block", block, g, bq)
+            if out is not None:
+                found = bq, out[0]
+                break
+        if found:
+            break
+    assert found, "no base and pre-grasp for the block in 12 draws per grasp"
+    bq, aq = found
+    (sugar_grasp,) = next(iter(module.streams["sample-grasp"]("sugar_box")))
+    w = task.world
+    km.obstacles = {"block": block}  # localized where it is
+    with km.planning() as pw:  # the pre-grasp cannot be reached with the box in hand
+        km._place_obstacles(pw)
+        pw.set_base(bq)
+        pw.set_arm(aq)
+        assert not pw.robot_collision()
+        pw.held = Held("sugar_box", sugar_grasp.pose)
+        pw.set_arm(aq)  # the held box follows the hand
+        assert pw.robot_collision()
+    checked_with: list = []
+    real = km.ks.plan_arm_motion
+
+    def spy(*args, **kw):
+        checked_with.append(None if w.held is None else w.held.obj)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(km.ks, "plan_arm_motion", spy)
+    km.holding, km.arm_now = ("sugar_box", sugar_grasp), tuple(ARM_CARRY)
+    try:
+        motion = module.streams["plan-arm-motion"]
+        out = motion(bq, tuple(ARM_CARRY), tuple(aq))
+        assert out is not None
+        assert np.allclose(out[0][0], ARM_CARRY) and np.allclose(out[0][-1], aq)
+        assert checked_with and set(checked_with) == {None}
+        checked_with.clear()
+        turned = tuple(np.add(ARM_CARRY, (0.4, 0, 0, 0, 0, 0, 0)))  # reached with the box
+        motion(bq, tuple(ARM_CARRY), turned)  # may be next: checked with the box in hand
+        assert checked_with and set(checked_with) == {"sugar_box"}
+    finally:
+        km.holding, km.arm_now, km.obstacles = None, None, {}
