@@ -224,6 +224,12 @@ class _Evaluation:
             stats.failures += 1
 
 
+def _rebound(node, names: dict[str, S.Const]):
+    """An atom or function term with the constants in ``names`` replaced."""
+    args = tuple(names.get(a.name, a) if isinstance(a, S.Const) else a for a in node.args)
+    return replace(node, args=args) if args != node.args else node
+
+
 def _bound(res: Result, binding: dict[str, str]) -> Instance:
     """``res``'s stream instance with its optimistic inputs bound to their real names."""
     inst = res.instance
@@ -580,7 +586,7 @@ class _FocusedLoop:
     def finish_incumbent(self) -> Solution:
         sol = self.incumbent
         assert sol is not None
-        return self.finish(SOLVED, sol.plan, sol.cost, sol.certificate)
+        return self.finish(SOLVED, sol.plan, sol.cost, sol.certificate, deferred=sol.deferred)
 
     def finish(self, status, plan=None, cost=None, certificate=(), deferred=(), message=""):
         self.stats.total_time = time.monotonic() - self.start
@@ -732,9 +738,9 @@ class _FocusedLoop:
         self.compiled_objects = inst.objects
         self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
         done = self.evaluate_stream_plan(ordered, inst.shared)
-        usable = self.stream_plan_ok and not later and not inst.shared
+        usable = self.stream_plan_ok and not inst.shared
         if done is None and usable:
-            found = self.bound_solution(compiled, plan, inst)
+            found = self.bound_solution(compiled, plan, inst, later)
             if found is not None and self.accept_drawn:
                 return found
             if found is not None:
@@ -743,20 +749,38 @@ class _FocusedLoop:
                 self.incumbent = found
         return done
 
-    def bound_solution(self, compiled, plan, inst) -> Solution | None:
+    def bound_solution(self, compiled, plan, inst, later=()) -> Solution | None:
         """Every result of the stream plan succeeded: the plan with its optimistic objects
         bound to their real values, when it is valid over the real facts and costs no more
         than planned (optimistic costs are lower bounds: replanning would find it again,
-        after one more planner call); ``None``: plan again."""
+        after one more planner call); ``None``: plan again.
+
+        ``later``: the results deferred to a later cycle (paper §VII): their outputs stay
+        optimistic, and their facts and cost terms hold as planned, over the values drawn
+        for their inputs -- as they would in the plan found by planning again, whose only
+        optimistic results would be these (a constrained replan of the kitchen spent its
+        last planner call, 1-1.5 s, finding the same plan again)."""
         binding = self.stream_plan_binding
         bound = [(name, tuple(binding.get(a, a) for a in args)) for name, args in plan]
-        if any(a in inst.objects for _, args in bound for a in args):
+        deferred_objs = {o for r in later for o in r.outputs}
+        if any(a in inst.objects and a not in deferred_objs for _, args in bound for a in args):
             return None
         facts = {f for f in self.problem.init if isinstance(f, S.Atom)}
         for r in self.ev.results:
             facts.update(r.certified)
-        values = [v for v in self.problem.init if isinstance(v, S.InitValue)]
-        values += [S.InitValue(t, S.Num(v)) for t, v in self.ev.real_functions.items()]
+        terms: dict[S.FuncTerm, float] = {}
+        if later:
+            rebind = {o: S.Const(binding[o]) for o in binding if isinstance(binding[o], str)}
+            for r in later:
+                facts.update(_rebound(a, rebind) for a in r.certified)
+            for v in compiled.source_problem.init:
+                if isinstance(v, S.InitValue) and isinstance(v.value, S.Num):
+                    terms[_rebound(v.fluent, rebind)] = v.value.value
+        for v in self.problem.init:
+            if isinstance(v, S.InitValue) and isinstance(v.value, S.Num):
+                terms[v.fluent] = v.value.value
+        terms.update(self.ev.real_functions)
+        values = [S.InitValue(t, S.Num(x)) for t, x in terms.items()]
         real = replace(compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values))
         try:
             pre = plan_preimage(compiled.source_domain, real, bound)
@@ -768,10 +792,15 @@ class _FocusedLoop:
             return None
         self.say(
             "  the plan holds with the values drawn"
+            + (f", {len(later)} deferred" if later else "")
             + ("" if self.accept_drawn else f" (cost {cost:g}; kept, planning again)")
         )
         return self.finish(
-            SOLVED, _steps(bound, self.values, set()), cost, sorted(pre.static_facts, key=str)
+            SOLVED,
+            _steps(bound, self.values, deferred_objs),
+            cost,
+            sorted(pre.static_facts, key=str),
+            deferred=list(later),
         )
 
     def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:

@@ -455,6 +455,7 @@ def run_policy(
                     settings.max_level + first - settings.initial_level,
                     first_level=first,
                     state=replace(state, constants=state.constants | own),
+                    accept_drawn=True,
                 )
                 if solution.solved:
                     constrained = "held"

@@ -127,6 +127,42 @@ def test_a_pick_rests_on_the_arm_clear_of_every_other_object(files):
     assert tested == {"cracker_box", "sugar_box"} and o == "block"
 
 
+def test_a_drawn_plan_with_deferred_motions_is_taken_without_planning_again(files):
+    # Cook's first plan: its stream plan all succeeds, the motions after the first action are
+    # deferred (paper §VII), and the plan holds with the values drawn.  With accept_drawn it is
+    # the solution -- the planner is not asked again for the same plan -- and the deferred
+    # motions stay optimistic in it, as in the plan the extra call finds.
+    from ssr_compile.streams.kitchen_module import make_module
+
+    from ssr_compile.focused import solve
+
+    domain, streams = files
+    runs = {}
+    for accept in (True, None):
+        task = make_task("cook", 0)
+        try:
+            problem, values = task_problem(task)
+            module = make_module(task, np.random.default_rng(0), values)
+            said: list[str] = []
+            runs[accept] = solve(
+                domain, streams, problem, module, planner="fd", time_limit=120, defer=True,
+                accept_drawn=accept, progress=said.append,
+            ), said  # fmt: skip
+        finally:
+            task.close()
+    (taken, said), (again, _) = runs[True], runs[None]
+    assert taken.solved and again.solved
+    assert any(x.strip().startswith("the plan holds with the values drawn, ") for x in said)
+    assert taken.stats.planner_calls == again.stats.planner_calls - 1
+    assert taken.cost == pytest.approx(again.cost)
+    assert [(s.name, s.args) for s in taken.plan] == [(s.name, s.args) for s in again.plan]
+    assert taken.deferred and not taken.plan[0].deferred
+    deferred_objects = {o for r in taken.deferred for o in r.outputs}
+    marked = {a for s in taken.plan for a in s.deferred}
+    assert marked and marked <= deferred_objects
+    assert all(v is None for s in taken.plan for a, v in zip(s.args, s.values) if a in marked)
+
+
 def test_focused_solves_inspect_and_the_first_action_runs(files):
     from ssr_compile.streams.kitchen_module import make_module, to_action
 

@@ -371,3 +371,28 @@ def test_a_cycle_line_says_what_the_environment_answered_when_the_execution_fail
               cost=4.0, belief="holding box", observation="FAILED: arm motion collides with counter")  # fmt: skip
     assert Cycle(**kw, failed=True).line().endswith("| FAILED: arm motion collides with counter")
     assert "collides" not in Cycle(**kw).line()  # an execution that went well: no echo
+
+
+def test_a_constrained_attempt_takes_a_plan_that_holds_with_its_values_drawn(monkeypatch):
+    # The tail fixes the plan's structure: once its stream plan all succeeds and the plan
+    # holds with the values drawn, planning again finds the same plan (Swap: its last planner
+    # call of a held cycle, 1-1.5 s).  An unconstrained attempt leaves it to the solver's
+    # default (a cost-optimal planner only), as cost matters there.
+    import ssr_compile.policy as policy_module
+
+    real_solve = policy_module.solve
+    calls: list[tuple[bool, object]] = []
+
+    def spy(*args, **kw):
+        state = kw.get("state")
+        calls.append((state is not None and bool(state.tail), kw.get("accept_drawn")))
+        return real_solve(*args, **kw)
+
+    monkeypatch.setattr(policy_module, "solve", spy)
+    episode = progress.make_episode(None, 0)
+    result = run_policy(episode, PolicySettings(max_cycles=25))
+    assert result.success, result.reason
+    constrained = [a for c, a in calls if c]
+    unconstrained = [a for c, a in calls if not c]
+    assert constrained and all(a is True for a in constrained)
+    assert unconstrained and all(a is None for a in unconstrained)
