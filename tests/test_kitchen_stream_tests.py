@@ -81,28 +81,26 @@ def test_cfree_refuses_a_placement_on_top_of_another_object(cook):
     assert module.streams["test-cfree"]("block", on_it, "block", on_it) is True
 
 
+def _block_pregrasp(task, module):
+    """A base and a pre-grasp configuration for the block, from the streams (12 draws of
+    bases per grasp)."""
+    block = _point(task, "block")
+    for (g,) in module.streams["sample-grasp"]("block"):
+        bases = module.streams["inv-reach"]("block", block, g)
+        for _ in range(12):
+            (bq,) = next(bases) or (None,)
+            out = None if bq is None else module.streams["inv-kin"]("block", block, g, bq)
+            if out is not None:
+                return bq, out[0]
+    pytest.fail("no base and pre-grasp for the block in 12 draws per grasp")
+
+
 def test_afree_refuses_an_arm_configuration_inside_another_object(cook):
     """``test-afree`` (so ``armblocked``, in pick and place): the pre-grasp of the block is
     refused with the sugar box believed where the hand would be, and allowed with the box
     elsewhere or with the arm already there (the robot is at that configuration: it is free)."""
     task, module = cook
-    block = _point(task, "block")
-    grasps = [g for (g,) in module.streams["sample-grasp"]("block")]
-    found = None
-    for g in grasps:
-        bases = module.streams["inv-reach"]("block", block, g)
-        for _ in range(12):
-            (bq,) = next(bases) or (None,)
-            if bq is None:
-                continue
-            out = module.streams["inv-kin"]("block", block, g, bq)
-            if out is not None:
-                found = bq, out[0]
-                break
-        if found:
-            break
-    assert found, "no base and pre-grasp for the block in 12 draws per grasp"
-    bq, aq = found
+    bq, aq = _block_pregrasp(task, module)
     hand = task.world.robot.forward_kinematics(bq, aq)[0]
     sugar_at_hand = _point(task, "sugar_box", (hand[0], hand[1]))
     test = module.streams["test-afree"]
@@ -130,19 +128,7 @@ def test_an_arm_motion_from_carry_to_a_grasp_is_planned_for_after_the_held_objec
     task, module = cook
     km = module.module
     block = _point(task, "block")
-    found = None
-    for (g,) in module.streams["sample-grasp"]("block"):
-        bases = module.streams["inv-reach"]("block", block, g)
-        for _ in range(12):
-            (bq,) = next(bases) or (None,)
-            out = None if bq is None else module.streams["inv-kin"]("block", block, g, bq)
-            if out is not None:
-                found = bq, out[0]
-                break
-        if found:
-            break
-    assert found, "no base and pre-grasp for the block in 12 draws per grasp"
-    bq, aq = found
+    bq, aq = _block_pregrasp(task, module)
     (sugar_grasp,) = next(iter(module.streams["sample-grasp"]("sugar_box")))
     w = task.world
     km.obstacles = {"block": block}  # localized where it is
