@@ -62,8 +62,9 @@ def _grasp_from_tool(tool_in_obj: Pose) -> Pose:
     return invert(tool_in_obj)
 
 
-# Radians (max over the joints) around an arm configuration the robot is in but the planning
-# world says collides, within which a motion leaving it is not collision-checked.
+# Radians (max over the joints) around the start of an arm motion within which the motion
+# leaves what it starts near (or in: the planning world is an estimate) and may come no closer
+# to it (see KitchenStreams.plan_arm_motion).
 ESCAPE = 0.15
 # Metres: an obstacle this near the arm (or what it holds) where a motion starts is left, not
 # approached, within ESCAPE of the start -- by more than LEAVE_TOL (see plan_arm_motion).
