@@ -39,17 +39,18 @@ import heapq
 import itertools
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
-from . import syntax as S
 from .compile.instantiate import Instance, Result
 from .errors import InstanceCapReached, PlannerFailure, SSRError, UnsupportedError
 from .focused import (
     SOLVED,
     Solution,
+    _bound_result,
     _FocusedLoop,
     _producers,
+    _real_problem,
     _split_deferred,
     _steps,
     order_stream_plan,
@@ -453,22 +454,9 @@ class AdaptiveLoop(_FocusedLoop):
         deferred = {o for r in sk.later for o in r.outputs}
         if any(a in inst.objects and a not in deferred for _, args in bound for a in args):
             return
-        facts = {f for f in self.problem.init if isinstance(f, S.Atom)}
         real_results = itertools.chain(self.ev.results, (r for _, r in self.hidden))
-        for r in real_results:
-            facts.update(r.certified)
-        for r in sk.later:
-            facts.update(_renamed(f, b.mapping) for f in r.certified)
-        functions: dict[S.FuncTerm, float] = {}
-        if sk.later:  # optimistic values for the deferred terms, real ones over them
-            for v in sk.compiled.source_problem.init:
-                if isinstance(v, S.InitValue):
-                    functions[_renamed(v.fluent, b.mapping)] = v.value.value
-        functions.update(self.ev.real_functions)
-        values = [v for v in self.problem.init if isinstance(v, S.InitValue)]
-        values += [S.InitValue(t, S.Num(v)) for t, v in functions.items()]
-        real = replace(
-            sk.compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values)
+        real = _real_problem(
+            self.problem, sk.compiled, real_results, self.ev.real_functions, sk.later, b.mapping
         )
         domain = sk.compiled.source_domain
         try:
@@ -493,20 +481,3 @@ class AdaptiveLoop(_FocusedLoop):
         if self.accept_drawn and cost <= sk.cost + 1e-6 and not cheaper:
             self.say("  the plan holds with the values drawn")
             self.done = self.finish_incumbent()
-
-
-
-def _renamed(x, mapping: dict[str, str]):
-    """An atom or function term with its arguments renamed (optimistic -> real)."""
-    return replace(x, args=tuple(S.Const(mapping.get(a.name, a.name)) for a in x.args))
-
-
-def _bound_result(r: Result, mapping: dict[str, str]) -> Result:
-    """A deferred result with its inputs bound to the real values of the plan."""
-    inst = r.instance
-    return replace(
-        r,
-        instance=Instance(inst.stream, tuple(mapping.get(x, x) for x in inst.inputs), inst.kind),
-        certified=tuple(_renamed(f, mapping) for f in r.certified),
-        domain=tuple(_renamed(f, mapping) for f in r.domain),
-    )

@@ -224,10 +224,43 @@ class _Evaluation:
             stats.failures += 1
 
 
-def _rebound(node, names: dict[str, S.Const]):
-    """An atom or function term with the constants in ``names`` replaced."""
-    args = tuple(names.get(a.name, a) if isinstance(a, S.Const) else a for a in node.args)
-    return replace(node, args=args) if args != node.args else node
+def _renamed(x, mapping: dict[str, str]):
+    """An atom or function term with its arguments renamed (optimistic -> real)."""
+    return replace(x, args=tuple(S.Const(mapping.get(a.name, a.name)) for a in x.args))
+
+
+def _bound_result(r: Result, mapping: dict[str, str]) -> Result:
+    """A deferred result with its inputs bound to the real values of the plan."""
+    inst = r.instance
+    return replace(
+        r,
+        instance=Instance(inst.stream, tuple(mapping.get(x, x) for x in inst.inputs), inst.kind),
+        certified=tuple(_renamed(f, mapping) for f in r.certified),
+        domain=tuple(_renamed(f, mapping) for f in r.domain),
+    )
+
+
+def _real_problem(problem, compiled, results, real_functions, later, mapping) -> S.Problem:
+    """The problem a plan bound to drawn values (``mapping``: optimistic -> real) is checked in:
+    the problem's facts and those of the real ``results``; with deferred results (``later``),
+    their facts and optimistic cost terms over the values drawn for their inputs (paper §VII);
+    the problem's numeric values and the real function values over those."""
+    facts = {f for f in problem.init if isinstance(f, S.Atom)}
+    for r in results:
+        facts.update(r.certified)
+    terms: dict[S.FuncTerm, float] = {}
+    for r in later:
+        facts.update(_renamed(a, mapping) for a in r.certified)
+    if later:
+        for v in compiled.source_problem.init:
+            if isinstance(v, S.InitValue):
+                terms[_renamed(v.fluent, mapping)] = v.value.value
+    for v in problem.init:
+        if isinstance(v, S.InitValue):
+            terms[v.fluent] = v.value.value
+    terms.update(real_functions)
+    values = tuple(S.InitValue(t, S.Num(x)) for t, x in terms.items())
+    return replace(compiled.source_problem, init=tuple(sorted(facts, key=str)) + values)
 
 
 def _bound(res: Result, binding: dict[str, str]) -> Instance:
@@ -765,23 +798,10 @@ class _FocusedLoop:
         deferred_objs = {o for r in later for o in r.outputs}
         if any(a in inst.objects and a not in deferred_objs for _, args in bound for a in args):
             return None
-        facts = {f for f in self.problem.init if isinstance(f, S.Atom)}
-        for r in self.ev.results:
-            facts.update(r.certified)
-        terms: dict[S.FuncTerm, float] = {}
-        if later:
-            rebind = {o: S.Const(binding[o]) for o in binding if isinstance(binding[o], str)}
-            for r in later:
-                facts.update(_rebound(a, rebind) for a in r.certified)
-            for v in compiled.source_problem.init:
-                if isinstance(v, S.InitValue) and isinstance(v.value, S.Num):
-                    terms[_rebound(v.fluent, rebind)] = v.value.value
-        for v in self.problem.init:
-            if isinstance(v, S.InitValue) and isinstance(v.value, S.Num):
-                terms[v.fluent] = v.value.value
-        terms.update(self.ev.real_functions)
-        values = [S.InitValue(t, S.Num(x)) for t, x in terms.items()]
-        real = replace(compiled.source_problem, init=tuple(sorted(facts, key=str)) + tuple(values))
+        mapping = {o: v for o, v in binding.items() if isinstance(v, str)}
+        real = _real_problem(
+            self.problem, compiled, self.ev.results, self.ev.real_functions, later, mapping
+        )
         try:
             pre = plan_preimage(compiled.source_domain, real, bound)
             cost = plan_cost(compiled.source_domain, real, bound)
@@ -800,7 +820,7 @@ class _FocusedLoop:
             _steps(bound, self.values, deferred_objs),
             cost,
             sorted(pre.static_facts, key=str),
-            deferred=list(later),
+            deferred=[_bound_result(r, mapping) for r in later],
         )
 
     def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:
