@@ -12,7 +12,7 @@ from dataclasses import replace
 import pytest
 
 from ssr_compile import syntax as S
-from ssr_compile.compile.constraints import ASSIGNED, constrain_plan
+from ssr_compile.compile.constraints import ASSIGNED, MAY, constrain_plan
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.parse import parse_domain, parse_problem
 from ssr_compile.planners import get_planner
@@ -73,6 +73,45 @@ def test_structure_of_the_constrained_problem():
     assert S.Atom(ASSIGNED, (S.Const(aq2), S.Var("?aq"))) in pre
     assert not any(isinstance(f, (S.Or, S.Imply)) for f in pre)  # no disjunction to split
     assert S.Atom("ssr-applied-2") in S.conjuncts(c.problem.goal)
+
+
+def test_free_values_are_narrowed_to_what_the_tail_admits():
+    _, p, c = _constrained()
+    may = {}
+    for f in c.problem.init:
+        if isinstance(f, S.Atom) and f.pred == MAY:
+            may.setdefault(c.free[f.args[0].name], set()).add(f.args[1].name)
+    # aq1: the arm's configuration before any step moved it (fluent, in the initial state);
+    # at1, aq2: the only motion from aq0 (aq8 also has kin, but no motion reaches it);
+    # p1: where d is now; bq1: the one base.
+    assert may == {"aq1": {"aq0"}, "at1": {"at5"}, "aq2": {"aq7"}, "p1": {"p9"}, "bq1": {"bq1"}}
+    # Each binding step requires its values; a later use only the bound one.
+    aq2 = next(k for k, v in c.free.items() if v == "aq2")
+    move, pick = c.domain.actions
+    assert S.Atom(MAY, (S.Const(aq2), S.Var("?q2"))) in S.conjuncts(move.precondition)
+    assert not any(a.pred == MAY and a.args[0] == S.Const(aq2) for a in S.conjuncts(pick.precondition) if isinstance(a, S.Atom))
+    # A value another step adds stays possible: after a motion to aq8, the pick may use it.
+    d, _ = _task()
+    p2 = replace(p, init=p.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq8")))),))
+    two = [("move", ("arm", "aq1", "at1", "aq2")), ("move", ("arm", "aq2", "at2", "aq3")),
+           ("pick", ("d", "p1", "gd", "bq1", "aq3"))]
+    c2 = constrain_plan(d, p2, two, lambda v: v in CONSTANTS)
+    aq3 = next(k for k, v in c2.free.items() if v == "aq3")
+    assert {f.args[1].name for f in c2.problem.init if isinstance(f, S.Atom) and f.pred == MAY and f.args[0].name == aq3} == {"aq8"}
+    fd = get_planner("fd")
+    lowered = compile_problem(d, None, p2, caps=fd.capabilities, plan_tail=two, is_constant=CONSTANTS.__contains__)
+    result = fd.solve(lowered.domain, lowered.problem, time_limit=20)
+    assert lowered.map_plan(result.actions) == [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("move", ("arm", "aq7", "at5", "aq8")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq8")),
+    ]
+    # A static fact the tail needs and nothing states: no value is left, and no plan.
+    gone = replace(p, init=tuple(f for f in p.init if not (isinstance(f, S.Atom) and f.pred == "kin" and f.args[0].name == "d")))
+    c3 = constrain_plan(d, gone, TAIL, lambda v: v in CONSTANTS)
+    assert not any(isinstance(f, S.Atom) and f.pred == MAY and c3.free[f.args[0].name] == "aq2" for f in c3.problem.init)
+    lowered = compile_problem(d, None, gone, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    assert fd.solve(lowered.domain, lowered.problem, time_limit=20).status != "solved"
 
 
 def test_constrained_plan_forces_sequence_and_constants_and_maps_back():
