@@ -223,8 +223,9 @@ def test_bases_are_sampled_for_placements_but_not_for_placements_made_from_here(
     assert not reach_poses & here  # ... none for those sampled in reach of the robot
 
 
-def _holding_box(task, arm):
-    """Cook's problem with the robot holding the cracker box, its arm at ``arm``."""
+def _holding_box(task, arm, base=None):
+    """Cook's problem with the robot holding the cracker box, its arm at ``arm`` (and its base
+    at ``base``, if given)."""
     from dataclasses import replace
 
     from ssr_compile.sim.problem import initial_state, state_problem
@@ -234,6 +235,8 @@ def _holding_box(task, arm):
     grasp = KitchenStreams(task.world, np.random.default_rng(0)).grasps("cracker_box")[0]
     beliefs = {o: b for o, b in known.beliefs.items() if o != "cracker_box"}
     known = replace(known, beliefs=beliefs, held=("cracker_box", grasp), arm=arm)
+    if base is not None:
+        known = replace(known, base=base)
     return state_problem(task, known)[0]
 
 
@@ -288,6 +291,53 @@ def test_the_arm_is_tucked_only_with_an_empty_hand(files):
         assert carry.status == "solved", carry.message
         tuck = plan_to([held, atom("atconf", "arm", "aq-tuck")])
         assert tuck.status == "unsolvable", tuck.actions
+    finally:
+        task.close()
+
+
+def test_holding_an_object_where_carry_is_refused_the_arm_moves_to_a_placement_from_there(files):
+    # Cook seed 9: the motion to carry stopped short holding the sugar box (the true world
+    # refused the rest); the motion back to carry and placing from where the arm stopped both
+    # failed, and with no motion between two configurations at the reached base, no plan was
+    # left.  plan-arm-motion-from goes from where the arm is to a placement's approach.
+    from dataclasses import replace
+
+    from ssr_compile.compile.instantiate import Instance
+    from ssr_compile.sim.robot import ARM_CARRY
+
+    from ssr_compile import syntax as S
+
+    domain, streams = files
+    task = make_task("cook", 0)
+    try:
+        # beside the counter, where Cook seed 9 held the sugar box
+        problem = _holding_box(task, tuple(v + 0.1 for v in ARM_CARRY), (0.44, 0.82, 0.0))
+        goal = S.And((S.Atom("handempty"),))
+        problem = replace(problem, goal=goal)
+        failed = [
+            Instance("plan-arm-motion", ("bq0", "aq-carry", "aq0")),
+            Instance("place-from", ("cracker_box", "g-cracker_box", "bq0", "aq0", "counter")),
+        ]
+
+        def plan(stream_file):
+            for level in (2, 3, 4):
+                compiled = compile_problem(domain, stream_file, problem, level=level, disabled=failed)
+                used = {str(r.instance) for r in compiled.instantiation.results}
+                assert not used & {str(i) for i in failed}
+                result = get_planner("fd").solve(compiled.domain, compiled.problem, time_limit=60)
+                if result.status == "solved":
+                    return compiled.map_plan(result.actions)
+            return None
+
+        found = plan(streams)
+        assert found is not None
+        assert found[0][0] == "move-arm" and found[0][1][:2] == ("bq0", "aq0")
+        assert [n for n, _ in found] == ["move-arm", "place"]
+        without = replace(streams, streams=tuple(
+            x for x in streams.streams if getattr(x, "name", "") != "plan-arm-motion-from"
+        ))
+        assert len(without.streams) == len(streams.streams) - 1
+        assert plan(without) is None
     finally:
         task.close()
 

@@ -125,6 +125,15 @@
     :outputs (?pb ?t)
     :certified (and (poseb ?o ?pb) (localized ?o ?pb) (beliefon ?o ?pb ?s) (traj arm ?t)
                     (kin ?o ?pb ?g ?bq ?aq ?t)))
+  ; ... and an arm motion from the configuration the arm is in to one used at the reached base,
+  ; with no stowed configuration between (deferrable).  Holding an object, the arm can only go
+  ; back to carry otherwise: Cook seed 9 stopped short of carry holding the sugar box (the true
+  ; world refused the rest), every motion back to carry failed, and no plan was left.
+  (:stream plan-arm-motion-from
+    :inputs (?bq ?q1 ?q2)
+    :domain (and (reached ?bq) (conf arm ?q1) (reached ?q1) (reach ?bq ?q2))
+    :outputs (?t)
+    :certified (and (traj arm ?t) (armmotion ?bq ?q1 ?t ?q2)))
   (:stream plan-pull-from
     :inputs (?d ?a1 ?a2 ?bq ?aq1)
     :domain (and (reached ?bq) (near ?bq ?d) (conf arm ?aq1) (reached ?aq1) (closed ?d ?a1)
