@@ -63,8 +63,11 @@ SCRIPT = textwrap.dedent(
 
 
 
-def _default_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+def _default_signals() -> None:
+    # The command keeps a signal ignored that it was started ignoring (nohup): the test is
+    # about a command started from a terminal, whatever started the test suite.
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
 
 
 def _alive(pid: int) -> bool:
@@ -114,9 +117,10 @@ def test_a_signal_stops_the_command_and_its_planner(tmp_path, mode, sig, code, w
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        # a shell that started the test suite in the background ignores SIGINT, and its
-        # children inherit that: give the command the default disposition a terminal gives
-        preexec_fn=_default_sigint,
+        # a shell that started the test suite in the background ignores SIGINT (nohup:
+        # SIGHUP), and its children inherit that: give the command the default dispositions
+        # a terminal gives
+        preexec_fn=_default_signals,
     )
     try:
         pid_text, child_tmp = _wait_for(out / "child.info").split()
