@@ -34,6 +34,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
+from ..check import changed_atoms
 from ..errors import UnsupportedError
 from .formulas import conj
 from .result import PassResult
@@ -121,7 +122,7 @@ def constrain_plan(
                 effect=conj(schema.effect, *eff),
             )
         )
-    domains = free_domains(domain, problem, [(s, t) for s, t, _ in terms])
+    domains = free_domains(domain, problem, [(s, t) for s, t, _ in terms], set(free.values()))
     may: list[S.Atom] = []
     for k, (action, (_, _, binds)) in enumerate(zip(actions, terms)):
         extra = []
@@ -168,13 +169,6 @@ def constrain_plan(
     return Constrained(new_domain, new_problem, steps, {v: k for k, v in free.items()})
 
 
-def _top_atoms(f) -> list[S.Atom]:
-    """The positive atoms of a precondition's top-level conjunction."""
-    if isinstance(f, S.And):
-        return [a for g in f.args for a in _top_atoms(g)]
-    return [f] if isinstance(f, S.Atom) and f.pred != "=" else []
-
-
 def _adds(effect, bound: frozenset[str] = frozenset()):
     """The atoms an effect may add, each with the variables a ``forall`` quantifies in it."""
     if isinstance(effect, S.Atom):
@@ -197,6 +191,7 @@ def free_domains(
     domain: S.Domain,
     problem: S.Problem,
     steps: Sequence[tuple[S.Action, dict[str, str]]],
+    free_vars: set[str],
 ) -> dict[str, set[str] | None]:
     """The values each free variable of a plan tail can take in a plan that follows the tail
     (``None``: not narrowed), as a fixpoint over the steps' preconditions:
@@ -207,12 +202,9 @@ def free_domains(
 
     Each free variable in such an atom keeps the values of the facts that match the atom's
     other arguments.  ``steps`` gives each step's schema and each parameter's term: a constant
-    or a free-variable object (a name starting ``free-``)."""
+    or one of the free-variable objects ``free_vars``."""
     derived = {ax.name for ax in domain.axioms}
-    fluent: set[str] = set()
-    for action in domain.actions:
-        fluent |= {a.pred for a, _ in _adds(action.effect)}
-        fluent |= {a.arg.pred for a in S.walk(action.effect) if isinstance(a, S.Not) and isinstance(a.arg, S.Atom)}
+    fluent = {a.pred for action in domain.actions for a in changed_atoms(action.effect)}
     facts: dict[str, list[tuple[str, ...]]] = {}
     for f in problem.init:
         if isinstance(f, S.Atom):
@@ -223,23 +215,19 @@ def free_domains(
             if t.name in bound or t.name not in term:
                 return ("*", "")
             value = term[t.name]
-            return ("v", value) if value.startswith("free-") else ("c", value)
+            return ("v", value) if value in free_vars else ("c", value)
         return ("c", t.name)
 
     # (step index, predicate, arguments) for every precondition atom; the adds likewise
     needs: list[tuple[int, str, tuple[Arg, ...]]] = []
     adds: list[tuple[int, str, tuple[Arg, ...]]] = []
     for i, (schema, term) in enumerate(steps):
-        for a in _top_atoms(schema.precondition):
-            if a.pred not in derived:
+        for a in S.conjuncts(schema.precondition):
+            if isinstance(a, S.Atom) and a.pred != "=" and a.pred not in derived:
                 needs.append((i, a.pred, tuple(arg_of(t, term) for t in a.args)))
         for a, bound in _adds(schema.effect):
             adds.append((i, a.pred, tuple(arg_of(t, term, bound) for t in a.args)))
-    dom: dict[str, set[str] | None] = {}
-    for _, term in steps:
-        for value in term.values():
-            if value.startswith("free-"):
-                dom[value] = None
+    dom: dict[str, set[str] | None] = dict.fromkeys(free_vars)
 
     def fits(arg: Arg, value: str) -> bool:
         kind, x = arg
