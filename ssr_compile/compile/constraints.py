@@ -94,7 +94,6 @@ def constrain_plan(
         eff: list[S.Formula] = [applied(i), S.Not(applied(i - 1))]
         binding_here: dict[str, S.Var] = {}  # free values this step binds -> first parameter
         term: dict[str, str] = {}
-        binds: dict[str, str] = {}  # free-variable object -> the parameter binding it
         for value, param in zip(args, schema.parameters):
             p = S.Var(param.name)
             if is_constant(value):
@@ -108,9 +107,9 @@ def constrain_plan(
             else:
                 v = S.Const(free.setdefault(value, f"free-{len(free) + 1}"))
                 binding_here[value] = p
-                binds[v.name] = p.name
                 eff.append(S.Atom(ASSIGNED, (v, p)))
             term[p.name] = free[value]
+        binds = {free[value]: p.name for value, p in binding_here.items()}
         terms.append((schema, term, binds))
         new_name = f"{name}-step{i}"
         steps[new_name] = (name, i)
