@@ -134,8 +134,10 @@ def test_a_signal_stops_the_command_and_its_planner(tmp_path, mode, sig, code, w
             p.wait()
     assert p.returncode == code, stderr
     assert stderr.strip() == f"ssr-compile: {word}"
-    deadline = time.monotonic() + 5
-    while _alive(child) and time.monotonic() < deadline:  # killed: may take a moment
+    # killed: on a loaded machine (the whole suite on 2 cores) the kernel may take a while to
+    # reap it
+    deadline = time.monotonic() + 20
+    while _alive(child) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not _alive(child)
     assert sorted(p.name for p in out.iterdir()) == ["child.info"]  # ssr-test-* removed
