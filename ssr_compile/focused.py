@@ -39,6 +39,10 @@ SOLVED = "solved"
 # Cost functions and tests at most this expensive (StreamInfo.cost) are evaluated eagerly.
 EAGER_COST = 0.1
 RESAMPLE = 2  # default ``resample`` of :func:`solve`
+# A planner call on a level with instances held back: at most SLICE_FACTOR times the longest
+# call that found a plan, and at least SLICE_MIN seconds (:meth:`_FocusedLoop.plan`)
+SLICE_FACTOR = 10.0
+SLICE_MIN = 1.0
 
 
 @dataclass
@@ -546,6 +550,10 @@ class _FocusedLoop:
         self.level = level
         self.first_level = level
         self.best_failure = "no plan"
+        # the longest planner call that found a plan: what a held-back level's call may take
+        # (:meth:`plan`)
+        self.longest_found = 0.0
+        self.sliced = False  # was the last planner call cut at its slice?
         self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
         self.redraws_per_level = max(int(redraws), 0)
         self.resample = max(int(resample), 0)
@@ -585,6 +593,11 @@ class _FocusedLoop:
             result, bound = self.plan(compiled)
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)
+            if result.status == "timeout" and self.sliced:
+                done = self.raise_level(result, bound)
+                if done is not None:
+                    return done
+                continue
             if result.status == "timeout":
                 return self.incumbent_or(
                     "timeout", message=f"the planner ran out of time at level {self.level}"
@@ -673,7 +686,26 @@ class _FocusedLoop:
         bound, in planner units), and that bound."""
         remaining = self.deadline - time.monotonic()
         bound = None if math.isinf(self.max_cost) else self.max_cost * compiled.scale
-        result, size = self.call_planner(compiled, remaining, bound)
+        # With instances held back at this level (their draws failed or were rejected), "no
+        # plan" only means "the next level", which gives them back -- and the planner may take
+        # any time to prove it, exponential in the objects to arrange (tamp2d with 7 blocks:
+        # the whole limit on the second call, at level 3).  Such a call gets a slice of
+        # SLICE_FACTOR times the longest call that found a plan (at least SLICE_MIN); cut
+        # there, the level rises as after "no plan".  Not at the last level (nothing would
+        # give the instances back), nor before a plan was found.
+        limit = remaining
+        if self.ev.tried and self.longest_found > 0 and self.level < self.max_level:
+            limit = min(remaining, max(SLICE_MIN, SLICE_FACTOR * self.longest_found))
+        result, size = self.call_planner(compiled, limit, bound)
+        self.sliced = result.status == "timeout" and limit < remaining
+        if result.status == SOLVED:
+            self.longest_found = max(self.longest_found, result.time)
+        elif self.sliced:
+            result = replace(
+                result,
+                message=f"the planner found no plan in its slice of {limit:.1f} s at level "
+                f"{self.level}, with instances held back",
+            )
         task = len(compiled.problem.objects) + len(compiled.domain.constants)
         shared = f" ({task} in the planner's task)" if task < size[0] else ""
         self.say(
@@ -808,7 +840,24 @@ class _FocusedLoop:
             planned = plan_cost(compiled.source_domain, compiled.source_problem, plan)
         except (PlanInvalid, SSRError):
             return None
-        if not cost <= planned + 1e-9 or cost > self.max_cost:
+        if cost > self.max_cost:
+            return None
+        if not cost <= planned + 1e-9:
+            # Valid, but dearer than planned (an optimistic cost was below the real one):
+            # planning again may find a cheaper plan, and this one is kept meanwhile -- the
+            # answer when time runs out, or when the next plan's optimistic cost is no lower
+            # (tamp2d with 8 blocks drew eight valid plans, each dearer than planned, and
+            # timed out with none of them).
+            if self.incumbent is None or cost < self.incumbent.cost - 1e-9:
+                self.say(f"  the plan holds with the values drawn but costs {cost:g} "
+                         f"(planned {planned:g}): kept, planning again")
+                self.incumbent = self.finish(
+                    SOLVED,
+                    _steps(bound, self.values, deferred_objs),
+                    cost,
+                    sorted(pre.static_facts, key=str),
+                    deferred=[_bound_result(r, mapping) for r in later],
+                )
             return None
         self.say(
             "  the plan holds with the values drawn"
@@ -844,6 +893,7 @@ class _FocusedLoop:
         again: dict[int, int] = {}  # draws each result had again
         after_failure: set[int] = set()  # results drawing again after a failed draw
         producer = {o: r for r in ordered for o in r.outputs}
+        position = {id(r): i for i, r in enumerate(ordered)}
         self.stream_plan_ok = False
         while True:
             failed: set[str] = set()
@@ -897,14 +947,28 @@ class _FocusedLoop:
                 failed.update(res.outputs)
                 failed_facts.update(res.certified)
                 self.say(f"  {res.instance} failed")
-                if res.instance.kind == "test":
-                    self.redraw_rejected(res, binding)
-                    blamed = [producer[x] for x in res.instance.inputs if x in producer]
-                    redraw += self._to_redraw(blamed, drawn, again, binding, self.resample)
-                elif self._draw_again_pays(res.instance.stream):
+                own = []
+                if res.instance.kind != "test" and self._draw_again_pays(res.instance.stream):
                     own = self._to_redraw([res], drawn, again, binding, min(self.resample, 1))
+                    own = [r for r in own if all(r is not x for x in redraw)]
                     after_failure.update(id(r) for r in own)
                     redraw += own
+                function = self.module.info_for(res.instance.stream).kind == "function"
+                if res.instance.kind == "test" or (function and not own):
+                    # A test rejected values drawn for this plan, or a function (at most one
+                    # answer: asking again is no use) found nothing for them (tamp2d's ik for
+                    # a placement out of reach): the draw made last among its inputs is
+                    # blamed and drawn again (the earlier ones passed their own tests) --
+                    # values drawn in turn, each against those kept.
+                    if res.instance.kind == "test":
+                        self.redraw_rejected(res, binding)
+                    blamed = [producer[x] for x in res.instance.inputs if x in producer]
+                    blamed.sort(key=lambda r: position[id(r)], reverse=True)
+                    redraw += [
+                        r
+                        for r in self._to_redraw(blamed, drawn, again, binding, self.resample)[:1]
+                        if all(r is not x for x in redraw)
+                    ]
             if all_ok or not redraw:
                 break
             # The redrawn results and everything downstream of them are evaluated again.

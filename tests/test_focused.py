@@ -329,9 +329,13 @@ def test_out_of_time_after_a_plan_was_drawn_the_solver_returns_that_plan():
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
     sol = solve(d, s, p, module, planner=ThreeCalls(), progress=said.append)
     assert sol.status == "solved", sol.message
-    assert sol.stats.planner_calls == 4
+    # the 4th call, on a level with instances held back, had a slice of the time: cut there,
+    # the level rose; the 5th call ran out of time
+    assert sol.stats.planner_calls == 5
+    assert sol.stats.levels == [1, 2, 2, 2, 3]
     assert said[-1].strip().endswith("the cheapest plan drawn so far")
-    assert [str(x) for x in sol.plan] == ["(move-base q0 t-3 q-2)", "(pick d p-d g-1 q-2 aq-4)"]
+    assert [x.name for x in sol.plan] == ["move-base", "pick"]
+    assert sol.plan[0].args[2] == sol.plan[1].args[3]  # picks where it moved to
     assert sol.cost == 6
     # without a plan drawn before, running out of time stays a timeout
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
@@ -363,7 +367,7 @@ def test_a_failed_or_rejected_draw_is_drawn_again_at_once_instead_of_planning_ag
     off, on = sols[0], sols[1]
     assert off.stats.resamples == 0 and on.stats.resamples >= 1
     assert on.stats.planner_calls < off.stats.planner_calls
-    assert on.cost <= off.cost
+    assert on.cost <= off.cost + 1e-9  # equal costs may differ in the last bit
 
 
 def test_a_sampler_that_finds_nothing_draws_again_once_per_solve():

@@ -7,6 +7,7 @@ Focused solver with deferred motions solves Inspect and its first action runs in
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -127,11 +128,12 @@ def test_a_pick_rests_on_the_arm_clear_of_every_other_object(files):
     assert tested == {"cracker_box", "sugar_box"} and o == "block"
 
 
-def test_a_drawn_plan_with_deferred_motions_is_taken_without_planning_again(files):
+def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheaper_is_left(files):
     # Cook's first plan: its stream plan all succeeds, the motions after the first action are
-    # deferred (paper §VII), and the plan holds with the values drawn.  With accept_drawn it is
-    # the solution -- the planner is not asked again for the same plan -- and the deferred
-    # motions stay optimistic in it, as in the plan the extra call finds.
+    # deferred (paper §VII), and the plan holds with the values drawn -- but its detection
+    # costs more than planned (the observation drawn is less likely than the optimistic one).
+    # It is kept, deferred motions and all, and the planner asked again; its next plan costs
+    # no less, so the kept plan is the solution, with accept_drawn or without.
     from ssr_compile.streams.kitchen_module import make_module
 
     from ssr_compile.focused import solve
@@ -152,10 +154,15 @@ def test_a_drawn_plan_with_deferred_motions_is_taken_without_planning_again(file
             task.close()
     (taken, said), (again, _) = runs[True], runs[None]
     assert taken.solved and again.solved
-    assert any(x.strip().startswith("the plan holds with the values drawn, ") for x in said)
-    assert taken.stats.planner_calls == again.stats.planner_calls - 1
-    assert taken.cost == pytest.approx(again.cost)
+    kept = [x.strip() for x in said if "the plan holds with the values drawn but costs" in x]
+    assert len(kept) == 1
+    m = re.search(r"costs ([\d.]+) \(planned ([\d.]+)\)", kept[0])
+    drawn_cost, planned = float(m.group(1)), float(m.group(2))
+    assert drawn_cost > planned
+    assert said[-1].strip() == "no cheaper than the plan drawn before: taken"
+    assert taken.cost == pytest.approx(drawn_cost) and again.cost == pytest.approx(drawn_cost)
     assert [(s.name, s.args) for s in taken.plan] == [(s.name, s.args) for s in again.plan]
+    assert taken.stats.planner_calls == again.stats.planner_calls
     assert taken.deferred and not taken.plan[0].deferred
     deferred_objects = {o for r in taken.deferred for o in r.outputs}
     marked = {a for s in taken.plan for a in s.deferred}
