@@ -1,0 +1,162 @@
+"""The Focused solver's choices after a failed draw or a failed planner call, on tamp2d and the
+progress example: which value is drawn again, how long a planner call on a level with
+instances held back may take, and which plan is kept when a valid plan costs more than
+planned."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from ssr_compile import focused
+from ssr_compile.focused import solve
+from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
+from ssr_compile.planners import get_planner
+from ssr_compile.planners.base import PlanResult
+from ssr_compile.streams import tamp2d as T
+
+ROOT = Path(__file__).parent.parent
+TAMP2D = ROOT / "domains" / "pddl" / "tamp2d"
+PROGRESS = ROOT / "domains" / "pddl" / "progress"
+
+# One block to move into a region that reaches past the gripper's reach (REACH ends at 14):
+# a placement drawn beyond it has no inverse kinematics.
+FAR = """(define (problem far) (:domain tamp2d)
+  (:objects q0 rtable rfar b0 p0)
+  (:init (Region rtable) (Region rfar) (Conf q0) (AtConf q0) (HandEmpty)
+         (Block b0) (Pose b0 p0) (AtPose b0 p0) (Contained b0 p0 rtable) (= (total-cost) 0))
+  (:goal (In b0 rfar)) (:metric minimize (total-cost)))"""
+
+
+def _far_solve(seed: int, **kw):
+    d = parse_domain((TAMP2D / "domain.pddl").read_text())
+    s = parse_stream_file((TAMP2D / "stream.pddl").read_text())
+    values = {
+        "q0": T.Conf(0.0, 3.0),
+        "rtable": T.Region(-5.5, 2.5),
+        "rfar": T.Region(12.0, 17.0),
+        "b0": T.Block("b0", 0.5, 0.8),
+        "p0": T.Pose(0.0),
+    }
+    module = replace(T.make_module(seed), values=values)
+    said: list[str] = []
+    sol = solve(
+        d, s, parse_problem(FAR), module, planner="fd", time_limit=30, initial_level=1,
+        progress=said.append, **kw,
+    )  # fmt: skip
+    return sol, [x.strip() for x in said]
+
+
+def test_a_function_that_finds_nothing_for_a_drawn_value_draws_that_value_again():
+    # Seed 1: the first placement drawn in rfar is out of reach, and ik (a function: asking it
+    # again gives nothing new) fails on it.  The placement -- the value drawn last among ik's
+    # inputs -- is drawn again at once, in the same stream plan, instead of planning again.
+    sol, said = _far_solve(1)
+    assert sol.status == "solved", sol.message
+    failed = said.index("ik(b0, opt2-p, opt3-g) failed")
+    assert said[failed + 1] == "drawing again: sample-placement(b0, rfar)"
+    placed = [step for step in sol.plan if step.name == "place"]
+    assert len(placed) == 1
+    pose = dict(zip(placed[0].args, placed[0].values))[placed[0].args[1]]
+    assert 12.0 + 0.25 <= pose.x <= T.REACH[1]  # inside rfar and within reach
+    # without drawing again, the failed ik costs planner calls on larger problems
+    without, said0 = _far_solve(1, resample=0)
+    assert without.status == "solved"
+    assert not any(x.startswith("drawing again") for x in said0)
+    assert sol.stats.planner_calls < without.stats.planner_calls
+
+
+class _HangsOnce:
+    """fd, but call ``hang`` runs until its time limit (a planner proving a large problem
+    unsolvable) and times out; the time limits it was given are recorded."""
+
+    def __init__(self, hang: int):
+        self.fd = get_planner("fd")
+        self.name, self.capabilities = "fd", self.fd.capabilities
+        self.hang, self.limits = hang, []
+
+    def solve(self, domain, problem, time_limit=None, cost_bound=None):
+        self.limits.append(time_limit)
+        if len(self.limits) == self.hang:
+            time.sleep(time_limit)
+            return PlanResult("timeout", None, None, time_limit, self.name)
+        return self.fd.solve(domain, problem, time_limit=time_limit, cost_bound=cost_bound)
+
+
+def _progress_task():
+    from ssr_compile.stream import module_for_problem
+
+    d = parse_domain((PROGRESS / "domain.pddl").read_text())
+    s = parse_stream_file((PROGRESS / "stream.pddl").read_text())
+    p = parse_problem((PROGRESS / "problem.pddl").read_text())
+    module = module_for_problem("ssr_compile.streams.progress", PROGRESS / "problem.pddl", 0)
+    return d, s, p, module
+
+
+def test_a_planner_call_on_a_level_with_instances_held_back_gets_a_slice_of_the_time():
+    # The progress example: level 1 has no plan, level 2's first plan has an inverse
+    # kinematics that fails (held back at level 2), and the third call -- level 2 again --
+    # never ends.  It is given a slice (SLICE_MIN here: the calls that found a plan took a few
+    # ms), not the 60 s left; cut there, the level rises and the next level is solved.
+    d, s, p, module = _progress_task()
+    planner = _HangsOnce(hang=3)
+    said: list[str] = []
+    start = time.monotonic()
+    sol = solve(d, s, p, module, planner=planner, time_limit=60, progress=said.append)
+    took = time.monotonic() - start
+    assert sol.status == "solved", sol.message
+    assert sol.stats.levels[:4] == [1, 2, 2, 3]
+    assert planner.limits[0] > 50 and planner.limits[1] > 50  # no plan found yet: all the time
+    assert planner.limits[2] == pytest.approx(focused.SLICE_MIN)
+    assert planner.limits[3] > 50  # instances given back at the new level: all the time
+    assert took < 20
+
+
+def test_the_last_level_gets_all_the_time_left():
+    # At the last level nothing would give the held-back instances back: no slice.
+    d, s, p, module = _progress_task()
+    planner = _HangsOnce(hang=3)
+    sol = solve(d, s, p, module, planner=planner, time_limit=3, max_level=2)
+    assert sol.status == "timeout"
+    assert planner.limits[2] > 2.5  # the time left, not a slice of it
+    assert sol.stats.levels == [1, 2, 2]
+
+
+def test_a_valid_plan_dearer_than_planned_is_the_answer_when_time_runs_out():
+    # tamp2d's problem: the first plan found holds with the values drawn, but its motions cost
+    # more than their optimistic lower bounds.  The planner then runs out of time: the plan
+    # drawn is the answer, not "timeout".
+    d = parse_domain((TAMP2D / "domain.pddl").read_text())
+    s = parse_stream_file((TAMP2D / "stream.pddl").read_text())
+    p = parse_problem((TAMP2D / "problem.pddl").read_text())
+    from ssr_compile.stream import module_for_problem
+
+    def module():
+        return module_for_problem("ssr_compile.streams.tamp2d", TAMP2D / "problem.pddl", 0)
+
+    said: list[str] = []
+
+    class StopsAfterTheDearPlan:
+        def __init__(self):
+            self.fd = get_planner("fd")
+            self.name, self.capabilities, self.calls = "fd", self.fd.capabilities, 0
+
+        def solve(self, domain, problem, time_limit=None, cost_bound=None):
+            self.calls += 1
+            if any("but costs" in x for x in said):
+                return PlanResult("timeout", None, None, time_limit or 0.0, self.name)
+            return self.fd.solve(domain, problem, time_limit=time_limit, cost_bound=cost_bound)
+
+    sol = solve(
+        d, s, p, module(), planner=StopsAfterTheDearPlan(), initial_level=3, max_level=3,
+        progress=said.append,
+    )  # fmt: skip
+    kept = [x.strip() for x in said if "but costs" in x]
+    assert len(kept) == 1, said
+    assert sol.status == "solved", sol.message
+    assert said[-1].strip().endswith("the cheapest plan drawn so far")
+    assert sol.cost == pytest.approx(float(kept[0].split("costs ")[1].split()[0]))
+    assert not any(a.startswith("opt") for step in sol.plan for a in step.args)
