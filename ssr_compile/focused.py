@@ -553,6 +553,7 @@ class _FocusedLoop:
         # the longest planner call that found a plan: what a held-back level's call may take
         # (:meth:`plan`)
         self.longest_found = 0.0
+        self.last_compile = 0.0  # seconds the last optimistic problem took to compile
         self.sliced = False  # was the last planner call cut at its slice?
         self.redraws: dict[Instance, int] = {}  # rejected draws given back at this level
         self.redraws_per_level = max(int(redraws), 0)
@@ -582,6 +583,14 @@ class _FocusedLoop:
             if time.monotonic() >= self.deadline:
                 return self.incumbent_or(
                     "timeout", message=f"time limit of {self.time_limit:g} s reached"
+                )
+            if time.monotonic() + self.last_compile >= self.deadline:
+                # compiling is not interrupted: one that would end past the limit is not
+                # started (tamp2d with 7 blocks: a 2.3 s compile began 1 s before the limit)
+                return self.incumbent_or(
+                    "timeout",
+                    message=f"time limit of {self.time_limit:g} s reached (too little left to "
+                    f"compile the next problem, {self.last_compile:.1f} s last time)",
                 )
             self.stats.iterations += 1
             self.stats.levels.append(self.level)
@@ -678,7 +687,8 @@ class _FocusedLoop:
             share=self.share,
             leaves=self.leaves,
         )
-        self.stats.compile_time += time.perf_counter() - started
+        self.last_compile = time.perf_counter() - started
+        self.stats.compile_time += self.last_compile
         return compiled
 
     def plan(self, compiled):

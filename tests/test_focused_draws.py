@@ -160,3 +160,24 @@ def test_a_valid_plan_dearer_than_planned_is_the_answer_when_time_runs_out():
     assert said[-1].strip().endswith("the cheapest plan drawn so far")
     assert sol.cost == pytest.approx(float(kept[0].split("costs ")[1].split()[0]))
     assert not any(a.startswith("opt") for step in sol.plan for a in step.args)
+
+
+def test_a_compile_that_would_end_past_the_time_limit_is_not_started(monkeypatch):
+    # Compiling is not interrupted: each compile here takes 1.2 s, and the progress example
+    # needs more than two iterations.  After two, too little is left for a third compile
+    # within the 3 s limit: the solver stops in time instead of overrunning it.
+    real_compile = focused.compile_problem
+
+    def slow_compile(*args, **kwargs):
+        time.sleep(1.2)
+        return real_compile(*args, **kwargs)
+
+    monkeypatch.setattr(focused, "compile_problem", slow_compile)
+    d, s, p, module = _progress_task()
+    start = time.monotonic()
+    sol = solve(d, s, p, module, time_limit=3.0)
+    took = time.monotonic() - start
+    assert sol.status == "timeout"
+    assert "too little left to compile the next problem" in sol.message
+    assert sol.stats.iterations == 2
+    assert took < 3.0
