@@ -963,13 +963,13 @@ class _FocusedLoop:
                     own = [r for r in own if all(r is not x for x in redraw)]
                     after_failure.update(id(r) for r in own)
                     redraw += own
-                function = self.module.info_for(res.instance.stream).kind == "function"
-                if res.instance.kind == "test" or (function and not own):
-                    # A test rejected values drawn for this plan, or a function (at most one
-                    # answer: asking again is no use) found nothing for them (tamp2d's ik for
-                    # a placement out of reach): the draw made last among its inputs is
-                    # blamed and drawn again (the earlier ones passed their own tests) --
-                    # values drawn in turn, each against those kept.
+                inputs_blamed = self.module.info_for(res.instance.stream).redraw_inputs
+                if res.instance.kind == "test" or (inputs_blamed and not own):
+                    # A test rejected values drawn for this plan, or a stream that blames its
+                    # inputs (StreamInfo.redraw_inputs: tamp2d's ik of a placement out of
+                    # reach) found nothing for them: the draw made last among its inputs is
+                    # drawn again (the earlier ones passed their own tests) -- values drawn in
+                    # turn, each against those kept.
                     if res.instance.kind == "test":
                         self.redraw_rejected(res, binding)
                     blamed = [producer[x] for x in res.instance.inputs if x in producer]

@@ -45,6 +45,11 @@ class StreamInfo:
     *constants* in the sense of paper §VI-A (grasps: still valid after new observations; not
     poses, configurations or trajectories); the online policy keeps them and their facts
     from one replanning cycle to the next (Algorithm 1's ``ConstantFacts``).
+    ``redraw_inputs``: when the stream finds nothing and cannot be asked again (a function),
+    its failure is its inputs' fault (tamp2d's ik of a placement out of reach): the input
+    drawn last in the stream plan is drawn again at once, as after a test's rejection.  Off
+    by default: re-drawing an input re-evaluates everything downstream of it, which costs
+    more than planning again where that includes motion planning (the kitchen).
     """
 
     deferrable: bool = False
@@ -53,6 +58,7 @@ class StreamInfo:
     optimistic_value: float | None = None
     kind: str | None = None
     constant_outputs: bool = False
+    redraw_inputs: bool = False
 
     @classmethod
     def of(cls, value: StreamInfo | Mapping[str, Any] | None, name: str) -> StreamInfo:

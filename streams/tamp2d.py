@@ -175,7 +175,7 @@ STREAMS: dict[str, Callable] = {
 STREAM_INFO: dict[str, StreamInfo] = {
     "sample-placement": StreamInfo(p_success=0.8, cost=1),
     "sample-grasp": StreamInfo(p_success=0.5, cost=1),
-    "ik": StreamInfo(kind="function", p_success=0.95, cost=1),
+    "ik": StreamInfo(kind="function", p_success=0.95, cost=1, redraw_inputs=True),
     "motion": StreamInfo(deferrable=True, kind="function", p_success=0.99, cost=10),
     "test-cfree": StreamInfo(kind="test", p_success=0.7, cost=0.1),
     # A lower bound of every real distance (the gripper climbs to SAFE_HEIGHT and back).

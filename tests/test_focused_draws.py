@@ -31,7 +31,7 @@ FAR = """(define (problem far) (:domain tamp2d)
   (:goal (In b0 rfar)) (:metric minimize (total-cost)))"""
 
 
-def _far_solve(seed: int, **kw):
+def _far_solve(seed: int, blame_inputs: bool = True, **kw):
     d = parse_domain((TAMP2D / "domain.pddl").read_text())
     s = parse_stream_file((TAMP2D / "stream.pddl").read_text())
     values = {
@@ -42,6 +42,9 @@ def _far_solve(seed: int, **kw):
         "p0": T.Pose(0.0),
     }
     module = replace(T.make_module(seed), values=values)
+    if not blame_inputs:
+        info = dict(module.info, ik=replace(module.info["ik"], redraw_inputs=False))
+        module = replace(module, info=info)
     said: list[str] = []
     sol = solve(
         d, s, parse_problem(FAR), module, planner="fd", time_limit=30, initial_level=1,
@@ -52,8 +55,9 @@ def _far_solve(seed: int, **kw):
 
 def test_a_function_that_finds_nothing_for_a_drawn_value_draws_that_value_again():
     # Seed 1: the first placement drawn in rfar is out of reach, and ik (a function: asking it
-    # again gives nothing new) fails on it.  The placement -- the value drawn last among ik's
-    # inputs -- is drawn again at once, in the same stream plan, instead of planning again.
+    # again gives nothing new; its info says redraw_inputs) fails on it.  The placement -- the
+    # value drawn last among ik's inputs -- is drawn again at once, in the same stream plan,
+    # instead of planning again.
     sol, said = _far_solve(1)
     assert sol.status == "solved", sol.message
     failed = said.index("ik(b0, opt2-p, opt3-g) failed")
@@ -67,6 +71,12 @@ def test_a_function_that_finds_nothing_for_a_drawn_value_draws_that_value_again(
     assert without.status == "solved"
     assert not any(x.startswith("drawing again") for x in said0)
     assert sol.stats.planner_calls < without.stats.planner_calls
+    # a function whose info does not blame its inputs leaves them drawn: the solver plans again
+    unblamed, said1 = _far_solve(1, blame_inputs=False)
+    assert unblamed.status == "solved"
+    failed = said1.index("ik(b0, opt2-p, opt3-g) failed")
+    assert said1[failed + 1].startswith("iteration ")
+    assert sol.stats.planner_calls < unblamed.stats.planner_calls
 
 
 class _HangsOnce:
