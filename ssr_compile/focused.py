@@ -723,6 +723,7 @@ class _FocusedLoop:
             f"{shared}, {size[1]} facts, {size[2]} values"
             + (f", {size[3]} ground actions" if size[3] is not None else "")
             + f"; planner {result.status} in {result.time:.3f} s"
+            + (" (its slice, with instances held back: the level rises)" if self.sliced else "")
         )
         return result, bound
 

@@ -123,6 +123,7 @@ def test_a_planner_call_on_a_level_with_instances_held_back_gets_a_slice_of_the_
     assert planner.limits[2] == pytest.approx(focused.SLICE_MIN)
     assert planner.limits[3] > 50  # instances given back at the new level: all the time
     assert took < 20
+    assert any(x.endswith("(its slice, with instances held back: the level rises)") for x in said)
 
 
 def test_the_last_level_gets_all_the_time_left():
