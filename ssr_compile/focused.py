@@ -853,35 +853,32 @@ class _FocusedLoop:
             return None
         if cost > self.max_cost:
             return None
-        if not cost <= planned + 1e-9:
-            # Valid, but dearer than planned (an optimistic cost was below the real one):
-            # planning again may find a cheaper plan, and this one is kept meanwhile -- the
-            # answer when time runs out, or when the next plan's optimistic cost is no lower
-            # (tamp2d with 8 blocks drew eight valid plans, each dearer than planned, and
-            # timed out with none of them).
-            if self.incumbent is None or cost < self.incumbent.cost - 1e-9:
-                self.say(f"  the plan holds with the values drawn but costs {cost:g} "
-                         f"(planned {planned:g}): kept, planning again")
-                self.incumbent = self.finish(
-                    SOLVED,
-                    _steps(bound, self.values, deferred_objs),
-                    cost,
-                    sorted(pre.static_facts, key=str),
-                    deferred=[_bound_result(r, mapping) for r in later],
-                )
+        dearer = not cost <= planned + 1e-9
+        if dearer and self.incumbent is not None and cost >= self.incumbent.cost - 1e-9:
             return None
-        self.say(
-            "  the plan holds with the values drawn"
-            + (f", {len(later)} deferred" if later else "")
-            + ("" if self.accept_drawn else f" (cost {cost:g}; kept, planning again)")
-        )
-        return self.finish(
+        drawn = self.finish(
             SOLVED,
             _steps(bound, self.values, deferred_objs),
             cost,
             sorted(pre.static_facts, key=str),
             deferred=[_bound_result(r, mapping) for r in later],
         )
+        if dearer:
+            # Valid, but dearer than planned (an optimistic cost was below the real one):
+            # planning again may find a cheaper plan, and this one is kept meanwhile -- the
+            # answer when time runs out, or when the next plan's optimistic cost is no lower
+            # (tamp2d with 8 blocks drew eight valid plans, each dearer than planned, and
+            # timed out with none of them).
+            self.say(f"  the plan holds with the values drawn but costs {cost:g} "
+                     f"(planned {planned:g}): kept, planning again")
+            self.incumbent = drawn
+            return None
+        self.say(
+            "  the plan holds with the values drawn"
+            + (f", {len(later)} deferred" if later else "")
+            + ("" if self.accept_drawn else f" (cost {cost:g}; kept, planning again)")
+        )
+        return drawn
 
     def evaluate_stream_plan(self, ordered: list[Result], shared) -> Solution | None:
         """Evaluate the stream plan in order, binding optimistic objects to real values; a

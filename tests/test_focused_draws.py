@@ -79,21 +79,33 @@ def test_a_function_that_finds_nothing_for_a_drawn_value_draws_that_value_again(
     assert sol.stats.planner_calls < unblamed.stats.planner_calls
 
 
-class _HangsOnce:
-    """fd, but call ``hang`` runs until its time limit (a planner proving a large problem
-    unsolvable) and times out; the time limits it was given are recorded."""
+class _Fd:
+    """fd, recording the time limit of each call; ``instead(n, time_limit)`` may answer call
+    ``n`` (from 1) in its place, or return None to let fd answer."""
 
-    def __init__(self, hang: int):
+    def __init__(self, instead):
         self.fd = get_planner("fd")
         self.name, self.capabilities = "fd", self.fd.capabilities
-        self.hang, self.limits = hang, []
+        self.instead, self.limits = instead, []
 
     def solve(self, domain, problem, time_limit=None, cost_bound=None):
         self.limits.append(time_limit)
-        if len(self.limits) == self.hang:
-            time.sleep(time_limit)
-            return PlanResult("timeout", None, None, time_limit, self.name)
+        answer = self.instead(len(self.limits), time_limit)
+        if answer is not None:
+            return answer
         return self.fd.solve(domain, problem, time_limit=time_limit, cost_bound=cost_bound)
+
+
+def _timeout(time_limit, *, hang: bool = False) -> PlanResult:
+    """A planner's timeout; with ``hang``, after running until the limit (a planner proving a
+    large problem unsolvable)."""
+    if hang:
+        time.sleep(time_limit)
+    return PlanResult("timeout", None, None, time_limit or 0.0, "fd")
+
+
+def _hangs_once(call: int) -> _Fd:
+    return _Fd(lambda n, limit: _timeout(limit, hang=True) if n == call else None)
 
 
 def _progress_task():
@@ -112,7 +124,7 @@ def test_a_planner_call_on_a_level_with_instances_held_back_gets_a_slice_of_the_
     # never ends.  It is given a slice (SLICE_MIN here: the calls that found a plan took a few
     # ms), not the 60 s left; cut there, the level rises and the next level is solved.
     d, s, p, module = _progress_task()
-    planner = _HangsOnce(hang=3)
+    planner = _hangs_once(3)
     said: list[str] = []
     start = time.monotonic()
     sol = solve(d, s, p, module, planner=planner, time_limit=60, progress=said.append)
@@ -129,7 +141,7 @@ def test_a_planner_call_on_a_level_with_instances_held_back_gets_a_slice_of_the_
 def test_the_last_level_gets_all_the_time_left():
     # At the last level nothing would give the held-back instances back: no slice.
     d, s, p, module = _progress_task()
-    planner = _HangsOnce(hang=3)
+    planner = _hangs_once(3)
     sol = solve(d, s, p, module, planner=planner, time_limit=3, max_level=2)
     assert sol.status == "timeout"
     assert planner.limits[2] > 2.5  # the time left, not a slice of it
@@ -145,25 +157,12 @@ def test_a_valid_plan_dearer_than_planned_is_the_answer_when_time_runs_out():
     p = parse_problem((TAMP2D / "problem.pddl").read_text())
     from ssr_compile.stream import module_for_problem
 
-    def module():
-        return module_for_problem("ssr_compile.streams.tamp2d", TAMP2D / "problem.pddl", 0)
-
+    module = module_for_problem("ssr_compile.streams.tamp2d", TAMP2D / "problem.pddl", 0)
     said: list[str] = []
-
-    class StopsAfterTheDearPlan:
-        def __init__(self):
-            self.fd = get_planner("fd")
-            self.name, self.capabilities, self.calls = "fd", self.fd.capabilities, 0
-
-        def solve(self, domain, problem, time_limit=None, cost_bound=None):
-            self.calls += 1
-            if any("but costs" in x for x in said):
-                return PlanResult("timeout", None, None, time_limit or 0.0, self.name)
-            return self.fd.solve(domain, problem, time_limit=time_limit, cost_bound=cost_bound)
-
+    # once the dear plan is kept, every call runs out of time
+    stops = _Fd(lambda n, limit: _timeout(limit) if any("but costs" in x for x in said) else None)
     sol = solve(
-        d, s, p, module(), planner=StopsAfterTheDearPlan(), initial_level=3, max_level=3,
-        progress=said.append,
+        d, s, p, module, planner=stops, initial_level=3, max_level=3, progress=said.append,
     )  # fmt: skip
     kept = [x.strip() for x in said if "but costs" in x]
     assert len(kept) == 1, said
