@@ -64,8 +64,17 @@ def test_structure_of_the_constrained_problem():
     pick = c.domain.actions[1]
     pre = S.conjuncts(pick.precondition)
     assert S.Atom("ssr-applied-1") in pre
-    assert S.Atom("=", (S.Var("?o"), S.Const("d"))) in pre
-    assert S.Atom("=", (S.Var("?g"), S.Const("gd"))) in pre
+    # The constants d and gd are substituted: the step no longer takes ?o and ?g, and no
+    # equality is left for a translator to explore over every object.
+    assert [p.name for p in pick.parameters] == ["?p", "?bq", "?aq"]
+    assert S.Atom("grasp", (S.Const("d"), S.Const("gd"))) in pre
+    assert not any(isinstance(f, S.Atom) and f.pred == "=" for f in pre)
+    assert [p.name for p in c.domain.actions[0].parameters] == ["?q1", "?t", "?q2"]  # not ?a
+    # The map back puts the constants in again, in the schema's order.
+    assert c.map_plan([("move-step1", ("aq0", "at5", "aq7")), ("pick-step2", ("p9", "bq1", "aq7"))]) == [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq7")),
+    ]
     aq2 = next(k for k, v in c.free.items() if v == "aq2")
     # aq2 is first used by step 1, which binds it; step 2 requires the bound value.
     move = c.domain.actions[0]
@@ -145,26 +154,44 @@ def test_repeated_free_variable_binds_consistently():
     ]
     assert validate_plan(d, p, inconsistent)[0]
     # ...but the constrained problem refuses aq8 for the aq2 already bound to aq7.
-    steps = [(f"{n}-step{i}", a) for i, (n, a) in enumerate(inconsistent, 1)]
+    # (The steps take the free parameters only: the constants arm, d and gd are substituted.)
+    steps = [("move-step1", ("aq0", "at5", "aq7")), ("pick-step2", ("p9", "bq1", "aq8"))]
     with pytest.raises(PlanInvalid):
         plan_preimage(c.domain, c.problem, steps)
-    good = [("move-step1", inconsistent[0][1]), ("pick-step2", ("d", "p9", "gd", "bq1", "aq7"))]
+    good = [("move-step1", ("aq0", "at5", "aq7")), ("pick-step2", ("p9", "bq1", "aq7"))]
     plan_preimage(c.domain, c.problem, good)
+    assert c.map_plan(good) == [inconsistent[0], ("pick", ("d", "p9", "gd", "bq1", "aq7"))]
+
+
+def test_a_value_used_twice_in_one_step_is_one_parameter():
+    d, p = _task()
+    # A motion from a configuration back to itself: the step takes ?q1 once for both.
+    loop = replace(p, init=p.init + (S.Atom("motion", tuple(map(S.Const, ("aq0", "at5", "aq0")))),))
+    tail = [("move", ("arm", "aq3", "at1", "aq3"))]
+    c = constrain_plan(d, loop, tail, lambda v: v == "arm")
+    move = c.domain.actions[0]
+    assert [x.name for x in move.parameters] == ["?q1", "?t"]
+    assert S.Atom("motion", (S.Var("?q1"), S.Var("?t"), S.Var("?q1"))) in S.conjuncts(move.precondition)
+    fd = get_planner("fd")
+    goal = replace(loop, goal=S.Atom("atconf", (S.Const("arm"), S.Const("aq0"))))
+    lowered = compile_problem(d, None, goal, caps=fd.capabilities, plan_tail=tail, is_constant="arm".__eq__)
+    result = fd.solve(lowered.domain, lowered.problem, time_limit=20)
+    assert lowered.map_plan(result.actions) == [("move", ("arm", "aq0", "at5", "aq0"))]
 
 
 def test_constants_and_order_and_last_step_are_required():
     d, p, c = _constrained()
     with pytest.raises(PlanInvalid):  # another object than the constant d
-        plan_preimage(c.domain, c.problem, [("pick-step2", ("e", "pe", "ge", "bq1", "aq0"))])
+        plan_preimage(c.domain, c.problem, [("pick-step2", ("pe", "bq1", "aq0"))])
     # A step applied twice: the chain consumed its marker (the motion back exists here).
     back = replace(c.problem, init=c.problem.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq0")))),))
-    twice = [("move-step1", ("arm", "aq0", "at5", "aq7")), ("move-step1", ("arm", "aq7", "at5", "aq0"))]
+    twice = [("move-step1", ("aq0", "at5", "aq7")), ("move-step1", ("aq7", "at5", "aq0"))]
     with pytest.raises(PlanInvalid, match="goal"):  # one application: applicable
         plan_preimage(c.domain, back, twice[:1])
     with pytest.raises(PlanInvalid, match="step 2"):
         plan_preimage(c.domain, back, twice)
     with pytest.raises(PlanInvalid):  # step 2 without step 1 (ssr-applied-1)
-        plan_preimage(c.domain, c.problem, [("pick-step2", ("d", "p9", "gd", "bq1", "aq8"))])
+        plan_preimage(c.domain, c.problem, [("pick-step2", ("p9", "bq1", "aq8"))])
     # Holding d some other way does not reach the goal without ssr-applied-2.
     p2 = replace(
         c.problem, init=c.problem.init + (S.Atom("holding", (S.Const("d"), S.Const("gd"))),)
@@ -172,7 +199,7 @@ def test_constants_and_order_and_last_step_are_required():
     with pytest.raises(PlanInvalid):
         plan_preimage(c.domain, p2, [])
     with pytest.raises(PlanInvalid):
-        plan_preimage(c.domain, p2, [("move-step1", ("arm", "aq0", "at5", "aq7"))])
+        plan_preimage(c.domain, p2, [("move-step1", ("aq0", "at5", "aq7"))])
 
 
 def test_changed_constant_makes_it_unsolvable():
@@ -214,3 +241,59 @@ def test_bad_tails_are_refused():
         constrain_plan(d, p, [("fly", ("x",))], lambda v: False)
     with pytest.raises(UnsupportedError, match="takes 4"):
         constrain_plan(d, p, [("move", ("arm",))], lambda v: False)
+
+
+def _ranges(sas_text: str) -> list[int]:
+    lines = sas_text.splitlines()
+    return [int(lines[i + 3]) for i, ln in enumerate(lines) if ln == "begin_variable"]
+
+
+def test_fd_skips_invariant_synthesis_for_a_constrained_task_only(tmp_path):
+    import contextlib
+    import io
+
+    from ssr_compile.compile.constraints import is_chained
+    from ssr_compile.errors import SSRError
+    from ssr_compile.planners.fd import FastDownward, _translate
+    from ssr_compile.printer import to_text
+
+    d, p = _task()
+    fd = get_planner("fd")
+    # (a second motion: the arm's configuration takes three values, a multi-valued variable)
+    p3 = replace(
+        p,
+        init=p.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq8")))),),
+        goal=S.Atom("atconf", (S.Const("arm"), S.Const("aq8"))),
+    )
+    free = compile_problem(d, None, p3, caps=fd.capabilities)
+    c = compile_problem(d, None, p, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    assert is_chained(c.domain) and not is_chained(free.domain)
+    (tmp_path / "d.pddl").write_text(to_text(c.domain))
+    (tmp_path / "p.pddl").write_text(to_text(c.problem))
+    ranges = {}
+    for invariants in (True, False):
+        sas = tmp_path / f"{invariants}.sas"
+        with contextlib.redirect_stdout(io.StringIO()):
+            _translate(str(tmp_path / "d.pddl"), str(tmp_path / "p.pddl"), str(sas), invariants)
+        ranges[invariants] = _ranges(sas.read_text())
+    # With invariants, the chain's markers (one true at a time) form multi-valued variables;
+    # without, every variable is binary.
+    assert max(ranges[True]) > 2 and set(ranges[False]) == {2}
+    # Either way the same plan; "auto" (the default) skips them here.
+    import shutil
+
+    plans, binary = {}, {}
+    for setting, task in (("on", c), ("auto", c), ("off", c), ("auto-free", free)):
+        planner = FastDownward(invariants=setting.split("-")[0], keep_files=True)
+        result = planner.solve(task.domain, task.problem, time_limit=20)
+        folder = result.message.rsplit("[files in ", 1)[1].rstrip("]")
+        binary[setting] = set(_ranges(open(f"{folder}/output.sas").read())) == {2}
+        shutil.rmtree(folder)
+        plans[setting] = task.map_plan(result.actions)
+    assert binary == {"on": False, "auto": True, "off": True, "auto-free": False}
+    assert plans["on"] == plans["auto"] == plans["off"] == [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq7")),
+    ]
+    with pytest.raises(SSRError, match="auto, on or off"):
+        FastDownward(invariants="sometimes")

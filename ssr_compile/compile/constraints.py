@@ -9,11 +9,14 @@ actions are one copy per plan step, so the next plan keeps the old plan's struct
   needs the order; deleting the previous marker also forbids repeating a step, which a
   planner's search would otherwise explore: on a kitchen replan with six free base motions
   the search ran past 60 s where the chain takes 23 expansions;
-* a constant argument ``v`` at parameter ``?p`` adds ``(= ?p v)``;
+* a constant argument ``v`` at parameter ``?p`` is substituted for ``?p``, which the step no
+  longer takes (the paper's ``(= ?p v)``; a translator explores an equality over every object:
+  on a Swap replan's tail of 25 steps, substituting cut Fast Downward's translation by a
+  seventh with the same plans); the map back puts ``v`` in again;
 * any other value ``v`` becomes a free-variable object ``@v`` (here ``free-k``).  The steps
   are totally ordered, so the first step that uses ``v`` is known when compiling: it binds
-  ``v`` (adds ``(assigned v ?p)``; a second parameter of the same step with value ``v`` gets
-  ``(= ?q ?p)``), and every later use requires ``(assigned v ?p)``.  Every use of one free
+  ``v`` (adds ``(assigned v ?p)``; a second parameter ``?q`` of the same step with value ``v``
+  becomes ``?p``), and every later use requires ``(assigned v ?p)``.  Every use of one free
   variable therefore takes the same new value.  The paper's guard ``(imply (bound v)
   (assigned v ?p))`` is equivalent under the total order, but a planner's translator splits
   each such disjunction into two copies of the action, and a step with three of them grounds
@@ -36,7 +39,7 @@ from dataclasses import dataclass, field, replace
 from .. import syntax as S
 from ..check import changed_atoms
 from ..errors import UnsupportedError
-from .formulas import conj
+from .formulas import conj, substitute
 from .result import PassResult
 
 Plan = list[tuple[str, tuple[str, ...]]]
@@ -49,6 +52,12 @@ def applied(i: int) -> S.Atom:
     return S.Atom(f"ssr-applied-{i}")
 
 
+def is_chained(domain: S.Domain) -> bool:
+    """Is ``domain`` (or what a later pass made of it) constrained to a plan's steps?"""
+    first = applied(0).pred
+    return any(p.name == first for p in domain.predicates)
+
+
 @dataclass
 class Constrained(PassResult):
     """The constraints pass's result (:func:`constrain_plan`): its map back names each step
@@ -58,10 +67,19 @@ class Constrained(PassResult):
     steps: dict[str, tuple[str, int]] = field(default_factory=dict)
     # free-variable object -> the value it stood for in the old plan
     free: dict[str, str] = field(default_factory=dict)
+    # new action name -> per original parameter, the index of the step's parameter that
+    # carries it (an int) or the constant substituted for it (a str)
+    arguments: dict[str, tuple[int | str, ...]] = field(default_factory=dict)
 
     def map_plan(self, plan: Plan) -> Plan:
-        """A plan of the constrained problem in the original action names."""
-        return [(self.steps.get(name, (name, 0))[0], args) for name, args in plan]
+        """A plan of the constrained problem in the original action names and arguments."""
+        out = []
+        for name, args in plan:
+            template = self.arguments.get(name)
+            if template is not None:
+                args = tuple(args[t] if isinstance(t, int) else t for t in template)
+            out.append((self.steps.get(name, (name, 0))[0], tuple(args)))
+        return out
 
 
 def constrain_plan(
@@ -80,6 +98,7 @@ def constrain_plan(
     # the parameters whose free variable the step binds
     terms: list[tuple[S.Action, dict[str, str], dict[str, str]]] = []
     steps: dict[str, tuple[str, int]] = {}
+    arguments: dict[str, tuple[int | str, ...]] = {}
     for i, (name, args) in enumerate(tail, start=1):
         schema = schemas.get(name)
         if schema is None:
@@ -94,14 +113,15 @@ def constrain_plan(
         eff: list[S.Formula] = [applied(i), S.Not(applied(i - 1))]
         binding_here: dict[str, S.Var] = {}  # free values this step binds -> first parameter
         term: dict[str, str] = {}
+        sub: dict[str, S.Term] = {}  # parameters the step no longer takes -> what replaces them
         for value, param in zip(args, schema.parameters):
             p = S.Var(param.name)
             if is_constant(value):
-                pre.append(S.Atom("=", (p, S.Const(value))))
+                sub[p.name] = S.Const(value)
                 term[p.name] = value
                 continue
             if value in binding_here:
-                pre.append(S.Atom("=", (p, binding_here[value])))
+                sub[p.name] = binding_here[value]
             elif value in free:
                 pre.append(S.Atom(ASSIGNED, (S.Const(free[value]), p)))
             else:
@@ -113,12 +133,21 @@ def constrain_plan(
         terms.append((schema, term, binds))
         new_name = f"{name}-step{i}"
         steps[new_name] = (name, i)
+        kept = [p for p in schema.parameters if p.name not in sub]
+        position = {p.name: k for k, p in enumerate(kept)}
+        arguments[new_name] = tuple(
+            sub[p.name].name
+            if isinstance(sub.get(p.name), S.Const)
+            else position[sub[p.name].name if p.name in sub else p.name]
+            for p in schema.parameters
+        )
         actions.append(
             replace(
                 schema,
                 name=new_name,
-                precondition=conj(schema.precondition, *pre),
-                effect=conj(schema.effect, *eff),
+                parameters=tuple(kept),
+                precondition=substitute(conj(schema.precondition, *pre), sub),
+                effect=substitute(conj(schema.effect, *eff), sub),
             )
         )
     domains = free_domains(domain, problem, [(s, t) for s, t, _ in terms], set(free.values()))
@@ -137,18 +166,8 @@ def constrain_plan(
         S.PredicateDecl(MAY, (S.Typed("?v"), S.Typed("?x"))),
     ]
     predicates += [S.PredicateDecl(applied(i).pred) for i in range(0, n + 1)]
-    requirements = domain.requirements
-    if requirements is not None:
-        extra = [
-            r
-            for r in (":equality",)
-            if r not in requirements
-        ]
-        requirements = requirements + tuple(extra)
-    new_domain = replace(
-        domain, actions=tuple(actions), predicates=tuple(predicates), requirements=requirements
-    )
-    # The constants the new preconditions name must be domain constants: a domain may only
+    new_domain = replace(domain, actions=tuple(actions), predicates=tuple(predicates))
+    # The constants substituted into the steps must be domain constants: a domain may only
     # mention objects it declares (Fast Downward's translator refuses others).
     used = {value for name, args in tail for value in args if is_constant(value)}
     known = {c.name for c in domain.constants}
@@ -165,7 +184,9 @@ def constrain_plan(
         init=problem.init + tuple(may) + (applied(0),),
         goal=conj(problem.goal, applied(n)),
     )
-    return Constrained(new_domain, new_problem, steps, {v: k for k, v in free.items()})
+    return Constrained(
+        new_domain, new_problem, steps, {v: k for k, v in free.items()}, arguments
+    )
 
 
 def _adds(effect, bound: frozenset[str] = frozenset()):
