@@ -49,8 +49,15 @@ def _task():
     return parse_domain(DOMAIN), parse_problem(PROBLEM)
 
 
-def _constrained():
+# A second motion from aq0 (to aq8, which kin also admits): the tail's trajectory and its
+# arm configuration aq2 can each take two values.  In PROBLEM every free value can take one.
+WIDE = (S.Atom("motion", (S.Const("aq0"), S.Const("at6"), S.Const("aq8"))),)
+
+
+def _constrained(wide: bool = True):
     d, p = _task()
+    if wide:
+        p = replace(p, objects=p.objects + (S.Typed("at6"),), init=p.init + WIDE)
     return d, p, constrain_plan(d, p, TAIL, lambda v: v in CONSTANTS)
 
 
@@ -65,13 +72,22 @@ def test_structure_of_the_constrained_problem():
     pre = S.conjuncts(pick.precondition)
     assert S.Atom("ssr-applied-1") in pre
     # The constants d and gd are substituted: the step no longer takes ?o and ?g, and no
-    # equality is left for a translator to explore over every object.
-    assert [p.name for p in pick.parameters] == ["?p", "?bq", "?aq"]
-    assert S.Atom("grasp", (S.Const("d"), S.Const("gd"))) in pre
+    # equality is left for a translator to explore over every object.  So are the free values
+    # that can take one value only: p1 (p9, where d is), bq1 (the one base) and, in the move,
+    # aq1 (aq0, where the arm is).
+    assert [p.name for p in pick.parameters] == ["?aq"]
+    assert S.Atom("kin", tuple(map(S.Const, ("d", "p9", "gd", "bq1"))) + (S.Var("?aq"),)) in pre
     assert not any(isinstance(f, S.Atom) and f.pred == "=" for f in pre)
-    assert [p.name for p in c.domain.actions[0].parameters] == ["?q1", "?t", "?q2"]  # not ?a
+    assert [p.name for p in c.domain.actions[0].parameters] == ["?t", "?q2"]  # not ?a, ?q1
     # The map back puts the constants in again, in the schema's order.
-    assert c.map_plan([("move-step1", ("aq0", "at5", "aq7")), ("pick-step2", ("p9", "bq1", "aq7"))]) == [
+    assert c.map_plan([("move-step1", ("at5", "aq7")), ("pick-step2", ("aq7",))]) == [
+        ("move", ("arm", "aq0", "at5", "aq7")),
+        ("pick", ("d", "p9", "gd", "bq1", "aq7")),
+    ]
+    # Without the second motion every free value has one value: the steps take nothing.
+    _, _, narrow = _constrained(wide=False)
+    assert [a.parameters for a in narrow.domain.actions] == [(), ()]
+    assert narrow.map_plan([("move-step1", ()), ("pick-step2", ())]) == [
         ("move", ("arm", "aq0", "at5", "aq7")),
         ("pick", ("d", "p9", "gd", "bq1", "aq7")),
     ]
@@ -90,10 +106,10 @@ def test_free_values_are_narrowed_to_what_the_tail_admits():
     for f in c.problem.init:
         if isinstance(f, S.Atom) and f.pred == MAY:
             may.setdefault(c.free[f.args[0].name], set()).add(f.args[1].name)
-    # aq1: the arm's configuration before any step moved it (fluent, in the initial state);
-    # at1, aq2: the only motion from aq0 (aq8 also has kin, but no motion reaches it);
-    # p1: where d is now; bq1: the one base.
-    assert may == {"aq1": {"aq0"}, "at1": {"at5"}, "aq2": {"aq7"}, "p1": {"p9"}, "bq1": {"bq1"}}
+    # at1, aq2: the two motions from aq0 (both ends have kin).  One value each, substituted,
+    # so with no ssr-may of their own: aq1, the arm's configuration before any step moved it
+    # (fluent, in the initial state); p1, where d is now; bq1, the one base.
+    assert may == {"at1": {"at5", "at6"}, "aq2": {"aq7", "aq8"}}
     # Each binding step requires its values; a later use only the bound one.
     aq2 = next(k for k, v in c.free.items() if v == "aq2")
     move, pick = c.domain.actions
@@ -105,8 +121,9 @@ def test_free_values_are_narrowed_to_what_the_tail_admits():
     two = [("move", ("arm", "aq1", "at1", "aq2")), ("move", ("arm", "aq2", "at2", "aq3")),
            ("pick", ("d", "p1", "gd", "bq1", "aq3"))]
     c2 = constrain_plan(d, p2, two, lambda v: v in CONSTANTS)
-    aq3 = next(k for k, v in c2.free.items() if v == "aq3")
-    assert {f.args[1].name for f in c2.problem.init if isinstance(f, S.Atom) and f.pred == MAY and f.args[0].name == aq3} == {"aq8"}
+    # (aq3: aq8 only, from aq7; nothing moves on from aq8): the pick takes no argument
+    assert c2.domain.actions[2].parameters == ()
+    assert c2.map_plan([("pick-step3", ())]) == [("pick", ("d", "p9", "gd", "bq1", "aq8"))]
     fd = get_planner("fd")
     lowered = compile_problem(d, None, p2, caps=fd.capabilities, plan_tail=two, is_constant=CONSTANTS.__contains__)
     result = fd.solve(lowered.domain, lowered.problem, time_limit=20)
@@ -154,44 +171,46 @@ def test_repeated_free_variable_binds_consistently():
     ]
     assert validate_plan(d, p, inconsistent)[0]
     # ...but the constrained problem refuses aq8 for the aq2 already bound to aq7.
-    # (The steps take the free parameters only: the constants arm, d and gd are substituted.)
-    steps = [("move-step1", ("aq0", "at5", "aq7")), ("pick-step2", ("p9", "bq1", "aq8"))]
+    # (The steps take the free parameters with more than one value only: the move ?t and ?q2,
+    # the pick ?aq.)
+    steps = [("move-step1", ("at5", "aq7")), ("pick-step2", ("aq8",))]
     with pytest.raises(PlanInvalid):
         plan_preimage(c.domain, c.problem, steps)
-    good = [("move-step1", ("aq0", "at5", "aq7")), ("pick-step2", ("p9", "bq1", "aq7"))]
+    good = [("move-step1", ("at5", "aq7")), ("pick-step2", ("aq7",))]
     plan_preimage(c.domain, c.problem, good)
     assert c.map_plan(good) == [inconsistent[0], ("pick", ("d", "p9", "gd", "bq1", "aq7"))]
 
 
 def test_a_value_used_twice_in_one_step_is_one_parameter():
-    d, p = _task()
-    # A motion from a configuration back to itself: the step takes ?q1 once for both.
-    loop = replace(p, init=p.init + (S.Atom("motion", tuple(map(S.Const, ("aq0", "at5", "aq0")))),))
-    tail = [("move", ("arm", "aq3", "at1", "aq3"))]
-    c = constrain_plan(d, loop, tail, lambda v: v == "arm")
-    move = c.domain.actions[0]
-    assert [x.name for x in move.parameters] == ["?q1", "?t"]
-    assert S.Atom("motion", (S.Var("?q1"), S.Var("?t"), S.Var("?q1"))) in S.conjuncts(move.precondition)
+    d = parse_domain("""(define (domain links) (:requirements :strips)
+      (:predicates (edge ?x ?y) (linked ?x ?y))
+      (:action link :parameters (?x ?y) :precondition (edge ?x ?y) :effect (linked ?x ?y)))""")
+    p = parse_problem("""(define (problem l) (:domain links) (:objects a b)
+      (:init (edge a a) (edge b b) (edge a b)) (:goal (linked b b)))""")
+    # The old plan linked v to itself: v can be a or b, and the step takes ?x for both.
+    c = constrain_plan(d, p, [("link", ("v", "v"))], lambda v: False)
+    step = c.domain.actions[0]
+    assert [x.name for x in step.parameters] == ["?x"]
+    assert S.Atom("edge", (S.Var("?x"), S.Var("?x"))) in S.conjuncts(step.precondition)
     fd = get_planner("fd")
-    goal = replace(loop, goal=S.Atom("atconf", (S.Const("arm"), S.Const("aq0"))))
-    lowered = compile_problem(d, None, goal, caps=fd.capabilities, plan_tail=tail, is_constant="arm".__eq__)
+    lowered = compile_problem(d, None, p, caps=fd.capabilities, plan_tail=[("link", ("v", "v"))])
     result = fd.solve(lowered.domain, lowered.problem, time_limit=20)
-    assert lowered.map_plan(result.actions) == [("move", ("arm", "aq0", "at5", "aq0"))]
+    assert lowered.map_plan(result.actions) == [("link", ("b", "b"))]
 
 
 def test_constants_and_order_and_last_step_are_required():
     d, p, c = _constrained()
-    with pytest.raises(PlanInvalid):  # another object than the constant d
-        plan_preimage(c.domain, c.problem, [("pick-step2", ("pe", "bq1", "aq0"))])
+    with pytest.raises(PlanInvalid):  # the step picks d, the constant (not e, which kin admits at aq0)
+        plan_preimage(c.domain, c.problem, [("pick-step2", ("aq0",))])
     # A step applied twice: the chain consumed its marker (the motion back exists here).
     back = replace(c.problem, init=c.problem.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq0")))),))
-    twice = [("move-step1", ("aq0", "at5", "aq7")), ("move-step1", ("aq7", "at5", "aq0"))]
+    twice = [("move-step1", ("at5", "aq7")), ("move-step1", ("at5", "aq0"))]
     with pytest.raises(PlanInvalid, match="goal"):  # one application: applicable
         plan_preimage(c.domain, back, twice[:1])
     with pytest.raises(PlanInvalid, match="step 2"):
         plan_preimage(c.domain, back, twice)
     with pytest.raises(PlanInvalid):  # step 2 without step 1 (ssr-applied-1)
-        plan_preimage(c.domain, c.problem, [("pick-step2", ("p9", "bq1", "aq8"))])
+        plan_preimage(c.domain, c.problem, [("pick-step2", ("aq8",))])
     # Holding d some other way does not reach the goal without ssr-applied-2.
     p2 = replace(
         c.problem, init=c.problem.init + (S.Atom("holding", (S.Const("d"), S.Const("gd"))),)
@@ -199,7 +218,7 @@ def test_constants_and_order_and_last_step_are_required():
     with pytest.raises(PlanInvalid):
         plan_preimage(c.domain, p2, [])
     with pytest.raises(PlanInvalid):
-        plan_preimage(c.domain, p2, [("move-step1", ("aq0", "at5", "aq7"))])
+        plan_preimage(c.domain, p2, [("move-step1", ("at5", "aq7"))])
 
 
 def test_changed_constant_makes_it_unsolvable():
