@@ -12,6 +12,7 @@ backend's default: off for plan-constrained tasks), the total translation and se
 agree with the first column's (same actions and cost).
 
     python bench/translate_bench.py                          # capture Swap seed 0, 13 cycles; replay
+    python bench/translate_bench.py --full                   # the whole episode, 5 runs per task
     python bench/translate_bench.py --capture /tmp/swap0 --task swap --seed 0 --cycles 13
     python bench/translate_bench.py --replay /tmp/old /tmp/new --invariants on,auto --runs 3
 """
@@ -160,7 +161,12 @@ def main() -> None:
     ap.add_argument("--variant", default="both")
     ap.add_argument("--invariants", default="on,auto", help="settings to replay (on, off, auto)")
     ap.add_argument("--runs", type=int, default=3, help="translations per task and setting")
+    ap.add_argument(
+        "--full", action="store_true", help="the whole episode (up to 100 cycles), 5 runs per task"
+    )
     args = ap.parse_args()
+    if args.full:
+        args.cycles, args.runs = 100, 5
     settings = [s.strip() for s in args.invariants.split(",") if s.strip()]
     bad = [s for s in settings if s not in ("on", "off", "auto")]
     if bad or args.runs < 1 or args.cycles < 1:
