@@ -5,6 +5,9 @@ in the same run, and the CPU time per call (this process and its children: forke
 planner binaries), which varies less than wall-clock time on a busy machine.  The CPU time of
 ``fd``'s persistent translator worker is not in that column (a child's CPU time is counted
 only once it has been reaped), so read ``fd``'s CPU as the search binary's and this process's.  Usage: ``python bench/planner_overhead.py [--calls 10] [--full] [SPEC ...]`` (``--full``: 30 calls).
+A SPEC may give the backend's options in brackets, e.g. ``'fd[prestart=0]'`` (``fd`` without its
+search binary started during translation); the calls of a problem are interleaved across the
+specs, so that the machine's load falls on all of them alike.
 """
 
 from __future__ import annotations
@@ -37,6 +40,16 @@ def _cpu() -> float:
     return total
 
 
+def make(spec: str):
+    """``get_planner`` for ``NAME`` or ``NAME[key=value,...]`` (values read as int if they can)."""
+    name, _, rest = spec.partition("[")
+    options = {}
+    for item in filter(None, rest.rstrip("]").split(",")):
+        key, _, value = item.partition("=")
+        options[key.strip()] = int(value) if value.strip().lstrip("-").isdigit() else value.strip()
+    return get_planner(name, **options)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("specs", nargs="*", default=DEFAULT_SPECS)
@@ -45,24 +58,26 @@ def main() -> None:
     args = ap.parse_args()
     args.calls = args.calls or (30 if args.full else 10)
     specs = ["fd", *(s for s in args.specs if s != "fd")]
-    planners = {s: get_planner(s) for s in specs}
+    planners = {s: make(s) for s in specs}
     rows = []
     for domain, problem in PROBLEMS:
         task = load(domain, problem)
-        medians = {}
-        for spec, planner in planners.items():
-            first = planner.solve(*task, time_limit=60)  # warm-up, and the status to show
-            times = []
-            cpu = _cpu()
-            for _ in range(args.calls):
-                start = time.perf_counter()
+        first = {s: pl.solve(*task, time_limit=60) for s, pl in planners.items()}  # warm-up
+        times: dict[str, list[float]] = {s: [] for s in planners}
+        cpu = dict.fromkeys(planners, 0.0)
+        for _ in range(args.calls):
+            for spec, planner in planners.items():
+                before, start = _cpu(), time.perf_counter()
                 planner.solve(*task, time_limit=60)
-                times.append(time.perf_counter() - start)
-            cpu = (_cpu() - cpu) / args.calls
-            medians[spec] = statistics.median(times)
-            rows.append((problem, spec, first.status, medians[spec], min(times), cpu))
-        for i in range(len(rows) - len(planners), len(rows)):
-            rows[i] = (*rows[i], rows[i][3] / medians["fd"])
+                times[spec].append(time.perf_counter() - start)
+                cpu[spec] += _cpu() - before
+        base = statistics.median(times["fd"])
+        for spec in planners:
+            med = statistics.median(times[spec])
+            rows.append(
+                (problem, spec, first[spec].status, med, min(times[spec]),
+                 cpu[spec] / args.calls, med / base)
+            )
     head = (
         f"{'problem':<8} {'planner':<22} {'status':<11} {'median ms':>9} {'min ms':>7}"
         f" {'cpu ms':>7} {'x fd':>6}"

@@ -242,3 +242,65 @@ def test_forked_worker_killed_on_timeout_and_replaced():
         assert worker.call((0.0,), timeout=5) == ("ok", 0.0) and worker.pid != first
     finally:
         worker.close()
+
+
+def test_fd_first_call_with_a_fresh_translator_worker():
+    """The search binary is started while the translator works; a translator worker forked
+    meanwhile must not keep the binary's input open (it waited for the end of its input until
+    the time limit)."""
+    from ssr_compile.planners import fd
+
+    domain, problem = load("blocks", "blocks")
+    for _ in range(3):
+        fd._TRANSLATOR.close()  # the next call forks the worker during the call
+        result = planner("fd").solve(domain, problem, time_limit=10)
+        assert_valid(domain, problem, result)
+
+
+def test_fd_opt_search_chosen_after_translation_when_the_guess_was_wrong(monkeypatch):
+    """A derived predicate the goal never needs is dropped by the translator: the binary
+    started for the blind search (axioms expected) is killed unused and LM-cut's runs."""
+    from ssr_compile.planners import proc
+
+    text = (FIXTURES / "reach-domain.pddl").read_text()
+    domain = parse_text(text.replace("(not (arrived))", "(conn ?a ?b)"), "reach-domain.pddl")
+    problem = parse_text(
+        (FIXTURES / "reach-problem.pddl").read_text().replace("(:goal (arrived))", "(:goal (at p4))"),
+        "reach-problem.pddl",
+    )
+    started: list = []
+    real = proc.StartedCommand
+
+    class Recording(real):
+        def __init__(self, cmd, **kw):
+            super().__init__(cmd, **kw)
+            started.append((cmd, self))
+
+    monkeypatch.setattr(proc, "StartedCommand", Recording)
+    result = get_planner("fd:opt").solve(domain, problem, time_limit=20)
+    assert result.status == "solved", result.message
+    assert result.actions == [("move", ("p1", "p2")), ("move", ("p2", "p3")), ("move", ("p3", "p4"))]
+    (cmd, command), = started
+    assert "astar(blind())" in cmd
+    assert command.proc.returncode is not None and command.proc.returncode != 0  # killed
+
+
+def test_started_command_fed_later_killed_at_its_limit_or_unused(tmp_path):
+    from ssr_compile.planners.proc import StartedCommand
+
+    data = tmp_path / "input"
+    data.write_bytes(b"x" * 200_000)  # more than a pipe holds: fed while it is read
+    log = tmp_path / "log"
+    counting = StartedCommand(["wc", "-c"], cwd=str(tmp_path), log_path=str(log))
+    assert counting.finish(str(data), 10) == 0
+    assert log.read_text().split() == ["200000"]
+
+    slow = StartedCommand(["sleep", "30"], cwd=str(tmp_path))
+    start = time.monotonic()
+    assert slow.finish(str(data), 0.3) is None
+    assert time.monotonic() - start < 5 and slow.proc.returncode is not None
+
+    unused = StartedCommand(["cat"], cwd=str(tmp_path))
+    unused.cancel()
+    assert unused.proc.returncode is not None
+    unused.cancel()  # twice is harmless

@@ -5,8 +5,9 @@ Downward's Python translator in a forked worker process (the translator modules 
 once, in the parent, before the fork; the worker is kept between calls, so a call pays neither
 an interpreter start nor a fork; it is killed and re-forked when a call times out), then runs the
 ``downward`` search binary shipped by the ``up_fast_downward`` package as a subprocess in its
-own process group, reading the SAS file.  Both steps share the call's wall-clock limit and are
-killed when it passes.  Supports everything the translator does: negation, disjunction,
+own process group, reading the SAS file (started while the translator works, so that its own
+start-up, a few milliseconds, overlaps the translation; ``prestart=False`` starts it after).
+Both steps share the call's wall-clock limit and are killed when it passes.  Supports everything the translator does: negation, disjunction,
 quantifiers, conditional effects, derived predicates (axioms), and costs given as numbers or
 static functions.
 
@@ -22,6 +23,7 @@ either way (35 constrained replans of a Swap episode: translation 22 s -> 17 s, 
 from __future__ import annotations
 
 import atexit
+import copy
 import importlib.util
 import math
 import os
@@ -83,6 +85,26 @@ def search_binary() -> Path:
     return path
 
 
+_PARSED_OPTIONS: dict = {}  # per invariants setting: the translator's options, parsed once
+
+
+def _set_options(options, domain_path: str, problem_path: str, sas_path: str, invariants: bool):
+    """The translator's options for one call.  Its argument parser is built and run once per
+    setting (a millisecond a call, a tenth of a small task's translation); later calls copy
+    the parsed options with this call's files, where the translator keeps them (its
+    ``options.options``, read through ``get_options()``)."""
+    extra = () if invariants else ("--invariant-generation-max-candidates", "0")
+    parsed = _PARSED_OPTIONS.get(extra)
+    if parsed is None or not hasattr(options, "get_options"):
+        options.set_options([domain_path, problem_path, "--sas-file", sas_path, *extra])
+        if hasattr(options, "get_options"):
+            _PARSED_OPTIONS[extra] = copy.copy(options.get_options())
+        return
+    ns = copy.copy(parsed)
+    ns.domain, ns.problem, ns.sas_file = domain_path, problem_path, sas_path
+    options.options = ns
+
+
 def _translate(
     domain_path: str, problem_path: str, sas_path: str, invariants: bool = True
 ) -> dict:
@@ -90,8 +112,7 @@ def _translate(
     from fast_downward.translate import main as translate_main
     from fast_downward.translate import normalize, options, pddl_parser
 
-    extra = [] if invariants else ["--invariant-generation-max-candidates", "0"]
-    options.set_options([domain_path, problem_path, "--sas-file", sas_path, *extra])
+    _set_options(options, domain_path, problem_path, sas_path, invariants)
     reasons: list[str] = []
     make_unsolvable = translate_main.unsolvable_sas_task
 
@@ -140,7 +161,12 @@ class FastDownward(ExternalPlanner):
     plain_names = False  # the translator reads any PDDL name, in separate namespaces
 
     def __init__(
-        self, search: str = "default", *, keep_files: bool = False, invariants: str = "auto"
+        self,
+        search: str = "default",
+        *,
+        keep_files: bool = False,
+        invariants: str = "auto",
+        prestart: bool = True,
     ):
         if invariants not in ("auto", "on", "off"):
             from ..errors import SSRError
@@ -149,6 +175,7 @@ class FastDownward(ExternalPlanner):
         self.search = search
         self.keep_files = keep_files
         self.invariants = invariants
+        self.prestart = prestart and proc.can_fork()
         self.name = "fd" if search == "default" else f"fd:{search}"
         self.capabilities = Capabilities(
             costs=True,
@@ -188,41 +215,67 @@ class FastDownward(ExternalPlanner):
             )
         return None
 
+    def _expected_info(self, domain: Domain) -> dict:
+        """What the translation will probably say about axioms and conditional effects (they
+        choose ``opt``'s search), read from the task before it is translated."""
+        from ..syntax import When, walk
+
+        conditional = any(isinstance(n, When) for a in domain.actions for n in walk(a.effect))
+        return {"axioms": bool(domain.axioms), "conditional_effects": conditional}
+
     def run(self, job: Job) -> list | None:
-        """The translator in the forked worker, then the search binary on its SAS file."""
+        """The translator in the forked worker, then the search binary on its SAS file.  The
+        binary is started while the translator works, with the search string the task will
+        most likely need, and fed the SAS file when it is written; when the translation
+        calls for another search string, or fails, that process is killed unused."""
         sas, log = job.file("output.sas"), job.file("translate.log")
+        plan_path, search_log = job.file("sas_plan"), job.file("search.log")
         invariants = self.invariants == "on" or (
             self.invariants == "auto" and not is_chained(job.task[0])
         )
-        status, info = _TRANSLATOR.call(
-            (job.domain, job.problem, sas, invariants),
-            timeout=job.clock.remaining(),
-            log_path=log,
-        )
-        if status == proc.TIMED_OUT:
-            raise Stop(TIMEOUT, f"translator exceeded the time limit of {job.time_limit:g} s")
-        if status != proc.OK:
-            detail = log_tail(log, 3)
-            raise Stop(
-                ERROR,
-                f"translator failed: {info}" + (f" ({detail})" if detail else ""),
-                log_text(log),
-            )
-        self.last_operators = info.get("operators")
-        if info["unsolvable"]:
-            raise Stop(UNSOLVABLE, f"translator: {info['unsolvable']}")
         try:
-            search = self._search_option(info, job.cost_bound)
+            guess = self._search_option(self._expected_info(job.task[0]), job.cost_bound)
         except ValueError as e:
             raise Stop(ERROR, str(e)) from None
-        plan_path, log = job.file("sas_plan"), job.file("search.log")
-        code = proc.run_command(
-            [str(self.binary), "--search", search, "--internal-plan-file", plan_path],
-            job.clock.remaining(),
-            cwd=job.dir,
-            stdin_path=sas,
-            log_path=log,
-        )
+        started = None
+        if self.prestart:
+            started = proc.StartedCommand(
+                self._command(guess, plan_path), cwd=job.dir, log_path=search_log
+            )
+        try:
+            status, info = _TRANSLATOR.call(
+                (job.domain, job.problem, sas, invariants),
+                timeout=job.clock.remaining(),
+                log_path=log,
+            )
+            if status == proc.TIMED_OUT:
+                raise Stop(TIMEOUT, f"translator exceeded the time limit of {job.time_limit:g} s")
+            if status != proc.OK:
+                detail = log_tail(log, 3)
+                raise Stop(
+                    ERROR,
+                    f"translator failed: {info}" + (f" ({detail})" if detail else ""),
+                    log_text(log),
+                )
+            self.last_operators = info.get("operators")
+            if info["unsolvable"]:
+                raise Stop(UNSOLVABLE, f"translator: {info['unsolvable']}")
+            search = self._search_option(info, job.cost_bound)
+            if started is not None and search == guess:
+                code = started.finish(sas, job.clock.remaining())
+            else:
+                if started is not None:
+                    started.cancel()
+                code = proc.run_command(
+                    self._command(search, plan_path),
+                    job.clock.remaining(),
+                    cwd=job.dir,
+                    stdin_path=sas,
+                    log_path=search_log,
+                )
+        finally:
+            if started is not None:
+                started.cancel()
         if code is None or code in _TIMEOUT_CODES:
             raise Stop(TIMEOUT, f"search exceeded the time limit of {job.time_limit:g} s")
         if code in _UNSOLVABLE_CODES:
@@ -234,8 +287,12 @@ class FastDownward(ExternalPlanner):
             raise Stop(ERROR, "out of memory")
         plan_path = _last_plan(plan_path)
         if code != 0 or plan_path is None:
+            log = search_log
             raise Stop(ERROR, f"search failed with exit code {code}: {log_tail(log)}", log_text(log))
         return read_plan(plan_path)
+
+    def _command(self, search: str, plan_path: str) -> list[str]:
+        return [str(self.binary), "--search", search, "--internal-plan-file", plan_path]
 
 
 def make_planner(variant: str | None = None, **options) -> FastDownward:

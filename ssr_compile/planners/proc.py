@@ -54,11 +54,32 @@ def _descendants(pid: int) -> list[int]:
     return out
 
 
+# Write ends of pipes the parent alone must hold (a :class:`StartedCommand`'s input): a child
+# forked meanwhile (the translator's worker, started or restarted during a call) would keep
+# such a pipe open, and the command reading it would never see its end.
+_PARENT_ONLY_FDS: set[int] = set()
+
+
+def _drop_parent_fds() -> None:
+    """In a forked child: point the parent-only descriptors at /dev/null (not closed, so that
+    the number stays taken and no object of the parent's closes an unrelated file later)."""
+    if not _PARENT_ONLY_FDS:
+        return
+    null = os.open(os.devnull, os.O_WRONLY)
+    for fd in list(_PARENT_ONLY_FDS):
+        try:
+            os.dup2(null, fd)
+        except OSError:
+            pass
+    os.close(null)
+
+
 def _child_setup(tmpdir: str | None) -> None:
     """In a forked child: SIGTERM and SIGHUP kill it (the parent's handlers, which turn them
     into exceptions for its own cleanup, are not wanted here), and temporary files of the
     work it does (and of the programs it starts) go to ``tmpdir``, which the parent removes
     whatever happens to the child."""
+    _drop_parent_fds()
     for name in ("SIGTERM", "SIGHUP"):
         signum = getattr(signal, name, None)
         if signum is not None:
@@ -136,6 +157,86 @@ def run_command(
         for f in (stdin, log):
             if not isinstance(f, int):
                 f.close()
+
+
+class StartedCommand:
+    """A command started before its input exists, reading it from a pipe.
+
+    Fast Downward's search binary spends a few milliseconds starting (loading, registering
+    its plugins, parsing the search string) before it reads the task; started while the
+    translator works, that start costs no wall-clock time.  :meth:`finish` feeds it a file
+    and waits under a limit like :func:`run_command`; :meth:`cancel` kills it unused.  Its
+    own process group, killed at the limit, as :func:`run_command`'s."""
+
+    def __init__(self, cmd: list[str], *, cwd: str, log_path: str | None = None):
+        self._log = open(log_path, "wb") if log_path else subprocess.DEVNULL
+        try:
+            self.proc = subprocess.Popen(
+                cmd,
+                stdin=subprocess.PIPE,
+                stdout=self._log,
+                stderr=subprocess.STDOUT,
+                cwd=cwd,
+                start_new_session=True,
+            )
+        except BaseException:
+            self._close_log()
+            raise
+        self._stdin_fd = self.proc.stdin.fileno()
+        _PARENT_ONLY_FDS.add(self._stdin_fd)
+        self._done = False
+
+    def _close_stdin(self) -> None:
+        _PARENT_ONLY_FDS.discard(self._stdin_fd)
+        try:
+            self.proc.stdin.close()
+        except OSError:
+            pass
+
+    def _close_log(self) -> None:
+        if not isinstance(self._log, int):
+            self._log.close()
+
+    def _end(self) -> None:
+        _kill_group(self.proc.pid)
+        self.proc.wait()
+
+    def _feed(self, path: str) -> None:
+        try:
+            with open(path, "rb") as f:
+                while chunk := f.read(1 << 16):
+                    self.proc.stdin.write(chunk)
+        except (BrokenPipeError, ValueError, OSError):
+            pass  # the command stopped reading (it failed or was killed at the limit)
+        finally:
+            self._close_stdin()
+
+    def finish(self, stdin_path: str, timeout: float) -> int | None:
+        """Feed ``stdin_path`` to the command and wait; its exit code, or ``None`` if it was
+        killed at ``timeout`` seconds."""
+        self._done = True
+        feeder = threading.Thread(target=self._feed, args=(stdin_path,), daemon=True)
+        feeder.start()
+        try:
+            return _wait(self.proc, max(timeout, 0.0))
+        except subprocess.TimeoutExpired:
+            self._end()
+            return None
+        except BaseException:  # KeyboardInterrupt: never leave a planner running
+            self._end()
+            raise
+        finally:
+            feeder.join()
+            self._close_log()
+
+    def cancel(self) -> None:
+        """Kill the command unused (a no-op once :meth:`finish` ran)."""
+        if self._done:
+            return
+        self._done = True
+        self._end()
+        self._close_stdin()
+        self._close_log()
 
 
 def _wait(proc: subprocess.Popen, timeout: float) -> int:
