@@ -56,9 +56,14 @@ def applied(i: int) -> S.Atom:
 
 
 def is_chained(domain: S.Domain) -> bool:
-    """Is ``domain`` (or what a later pass made of it) constrained to a plan's steps?"""
+    """Is ``domain`` (or what a later pass made of it, the grounding pass's ``NAME-N`` atoms
+    included) constrained to a plan's steps?"""
     first = applied(0).pred
-    return any(p.name == first for p in domain.predicates)
+    prefix = first + "-"
+    return any(
+        p.name == first or (p.name.startswith(prefix) and p.name[len(prefix) :].isdigit())
+        for p in domain.predicates
+    )
 
 
 @dataclass
