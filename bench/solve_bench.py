@@ -9,9 +9,12 @@ Also pddlstream's continuous_tamp (its domain and stream files, read in place fr
 corpus when present, with the streams of ``tests/fixtures/ctamp``).  ``--option KEY=VALUE``
 passes a keyword to the solver (``share=1``, ``eager_tests=0``, ``eager_cost=-1``...).
 ``--algorithm focused adaptive`` runs each cell with each algorithm, interleaved run by run
-(one row per algorithm, the same runs' conditions: before/after in one table).
+(one row per algorithm, the same runs' conditions: before/after in one table); ``--planner
+SPEC...`` the same with planner backends (``'[prestart=0]'``: the example's own, with that
+option).  ``--seeds 0-9`` runs each cell with each seed of the streams (a plan's cost depends
+on the values drawn: one seed's is one sample).
 
-Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE] [--algorithm NAME...]
+Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE] [--algorithm NAME...] [--planner SPEC...] [--seeds SEEDS]
 """
 
 from __future__ import annotations
@@ -32,7 +35,11 @@ sys.path.insert(0, str(ROOT))
 
 from ssr_compile.focused import solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
+from ssr_compile.experiment import parse_seeds  # noqa: E402
 from ssr_compile.stream import module_for_problem  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from planner_overhead import make as make_planner  # noqa: E402
 
 FIXTURES = {
     "pp1d (fixture)": (
@@ -71,19 +78,30 @@ def examples():
 
 
 def run_once(
-    folder: Path, config: dict, problem: str, defer: bool, time_limit: float, options: dict
+    folder: Path,
+    config: dict,
+    problem: str,
+    defer: bool,
+    time_limit: float,
+    options: dict,
+    planner: str | None = None,
+    seed: int = 0,
 ):
     d = parse_domain(Path(config.get("domain_file", folder / "domain.pddl")).read_text())
     s = parse_stream_file(Path(config.get("stream_file", folder / "stream.pddl")).read_text())
     p = parse_problem((folder / problem).read_text())
-    module = module_for_problem(config["streams"], folder / problem, 0, search=[ROOT])
+    module = module_for_problem(config["streams"], folder / problem, seed, search=[ROOT])
+    spec = planner or config.get("planner", "fd")
+    if spec.startswith("["):  # the example's planner, with these options
+        spec = config.get("planner", "fd") + spec
+    backend = make_planner(spec) if "[" in spec else spec
     start = time.perf_counter()
     sol = solve(
         d,
         s,
         p,
         module,
-        planner=config.get("planner", "fd"),
+        planner=backend,
         time_limit=time_limit,
         defer=defer,
         initial_level=int(config.get("level", 1)),
@@ -137,7 +155,24 @@ def main() -> None:
         metavar="KEY=VALUE",
         help="a keyword of the solver, e.g. --option share=1 --option eager_tests=0",
     )
+    ap.add_argument(
+        "--planner",
+        nargs="+",
+        default=[None],
+        metavar="SPEC",
+        help="planner backend(s) (default: each example's); options in brackets, e.g. "
+        "'fd:opt[prestart=0]', or '[prestart=0]' for the example's planner with them; "
+        "several: interleaved runs, a row each",
+    )
+    ap.add_argument(
+        "--seeds",
+        default="0",
+        metavar="SEEDS",
+        help="the streams' seeds, e.g. 0-9 (default 0); with several, each row's cost is the "
+        "median over them and a last column gives their mean",
+    )
     args = ap.parse_args()
+    seeds = parse_seeds(args.seeds)
     options = {}
     for o in args.option:
         key, _, value = o.partition("=")
@@ -158,11 +193,13 @@ def main() -> None:
             if not selected(name, problem, args.only):
                 continue
             for defer in (False,) if args.no_defer else (False, True):
-                rows: dict[str, list] = {a: [] for a in args.algorithm}
+                rows: dict[tuple, list] = {
+                    (a, pl): [] for a in args.algorithm for pl in args.planner
+                }
                 try:
-                    for _ in range(args.runs):
-                        for algorithm in args.algorithm:
-                            rows[algorithm].append(
+                    for _, seed in ((r, sd) for sd in seeds for r in range(args.runs)):
+                        for algorithm, planner in rows:
+                            rows[algorithm, planner].append(
                                 run_once(
                                     folder,
                                     config,
@@ -170,16 +207,19 @@ def main() -> None:
                                     defer,
                                     args.time_limit,
                                     {**options, "algorithm": algorithm},
+                                    planner,
+                                    seed,
                                 )
                             )
                 except Exception as e:  # noqa: BLE001 - a broken example is a row, not a crash
                     print(f"{name:16s} {problem:22s} {str(defer):5s} error: {e}")
                     continue
-                for algorithm, runs in rows.items():
-                    print_row(name, problem, defer, algorithm, runs)
+                for (algorithm, planner), runs in rows.items():
+                    label = planner or ""
+                    print_row(name, problem, defer, algorithm, runs, label, len(seeds) > 1)
 
 
-def print_row(name, problem, defer, algorithm, rows) -> None:
+def print_row(name, problem, defer, algorithm, rows, planner="", mean=False) -> None:
     statuses = {r[0] for r in rows}
     sizes = [r[5] for r in rows if r[5] is not None]
     size = (
@@ -193,7 +233,9 @@ def print_row(name, problem, defer, algorithm, rows) -> None:
         f"{statistics.median(r[1] for r in rows):9.3f} "
         f"{statistics.median(r[2] for r in rows):7.0f} "
         f"{statistics.median(r[3] for r in rows):7.0f} "
-        f"{statistics.median(r[4] for r in rows):8.2f} {size:>14s}",
+        f"{statistics.median(r[4] for r in rows):8.2f} {size:>14s}"
+        + (f" mean cost {statistics.fmean(r[4] for r in rows):.2f}" if mean else "")
+        + (f"  {planner}" if planner else ""),
         flush=True,
     )
 
