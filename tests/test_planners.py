@@ -304,3 +304,35 @@ def test_started_command_fed_later_killed_at_its_limit_or_unused(tmp_path):
     unused.cancel()
     assert unused.proc.returncode is not None
     unused.cancel()  # twice is harmless
+
+
+def test_fd_translator_timeout_kills_the_started_search_too():
+    """A task whose translation outlasts the limit (a four-parameter action over 40 objects:
+    2.5 million ground actions): a timeout within the limit, and neither the translator nor
+    the search binary started beside it is left running."""
+    import os
+
+    from ssr_compile.planners.proc import _descendants
+
+    objects = " ".join(f"o{i}" for i in range(40))
+    domain = parse_text(
+        "(define (domain wide) (:requirements :strips) (:predicates (p ?a ?b ?c ?d) (done))"
+        " (:action a :parameters (?a ?b ?c ?d) :precondition (and)"
+        " :effect (and (p ?a ?b ?c ?d))))",
+        "wide-domain.pddl",
+    )
+    problem = parse_text(
+        f"(define (problem w) (:domain wide) (:objects {objects}) (:init) (:goal (done)))",
+        "wide-problem.pddl",
+    )
+    start = time.monotonic()
+    result = get_planner("fd").solve(domain, problem, time_limit=1.0)
+    assert result.status == "timeout" and "translator" in result.message, result.message
+    assert time.monotonic() - start < 3.0
+    names = []
+    for pid in _descendants(os.getpid()):
+        try:
+            names.append(open(f"/proc/{pid}/comm").read().strip())
+        except OSError:
+            pass
+    assert "downward" not in names, names
