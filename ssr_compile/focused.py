@@ -717,7 +717,8 @@ class _FocusedLoop:
                 f"{self.level}, with instances held back",
             )
         task = len(compiled.problem.objects) + len(compiled.domain.constants)
-        shared = f" ({task} in the planner's task)" if task < size[0] else ""
+        # (a ground task, unified-planning's or pyperplan's, names no object at all)
+        shared = f" ({task} in the planner's task)" if 0 < task < size[0] else ""
         self.say(
             f"iteration {self.stats.iterations}: level {self.level}, problem {size[0]} objects"
             f"{shared}, {size[1]} facts, {size[2]} values"

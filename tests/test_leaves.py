@@ -123,3 +123,17 @@ def test_verbose_solve_shows_the_planners_task_beside_the_optimistic_problem(cap
     out = capsys.readouterr()
     sizes = re.findall(r"problem (\d+) objects \((\d+) in the planner's task\)", out.out + out.err)
     assert sizes and all(int(task) < int(opt) for opt, task in sizes)
+
+
+def test_verbose_solve_with_a_ground_task_names_no_task_size(capsys):
+    """pyperplan's task is ground (no objects at all): "(0 in the planner's task)" said
+    nothing true; the line gives the ground actions instead."""
+    from ssr_compile.cli import main
+
+    d, s, p = (str(PP / n) for n in ("domain.pddl", "stream.pddl", "problem.pddl"))
+    args = ["solve", d, s, p, "--streams", str(PP / "streams.py"), "-v", "--planner", "pyperplan"]
+    assert main(args) == 0
+    out = capsys.readouterr()
+    lines = [ln for ln in (out.out + out.err).splitlines() if ln.startswith("iteration ")]
+    assert lines and all("ground actions" in ln for ln in lines)
+    assert not any("in the planner's task" in ln for ln in lines)
