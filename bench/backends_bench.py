@@ -5,6 +5,9 @@ sizes.  Each plan is checked against the optimistic problem by the project's own
     python bench/backends_bench.py                  # one run per cell (about a minute)
     python bench/backends_bench.py --full           # medians of 3 runs
     python bench/backends_bench.py --planners fd,pyperplan --problems kitchen/stow
+    python bench/backends_bench.py --planners 'up:fast-downward[invariants=on]','up:fast-downward[invariants=off]'
+
+A planner may carry backend options in brackets (one each: the list is comma-separated).
 """
 
 from __future__ import annotations
@@ -16,8 +19,9 @@ import time
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.examples import SHIPPED_PROBLEMS, load_example
 from ssr_compile.parse import parse_file
-from ssr_compile.planners import get_planner
 from ssr_compile.preimage import PlanInvalid, plan_preimage
+
+from planner_overhead import make as get_planner  # NAME or NAME[key=value]
 
 PROBLEMS = SHIPPED_PROBLEMS  # (example, problem file, level at which it has a plan)
 PLANNERS = ["fd", "pyperplan", "up:fast-downward", "up:pyperplan"]
@@ -68,7 +72,7 @@ def main() -> None:
     args.runs = args.runs or (3 if args.full else 1)
     wanted = [w for w in args.problems.split(",") if w]
     print(
-        f"{'problem':32s} {'planner':18s} {'status':9s} {'time s':>7s} {'len':>4s} "
+        f"{'problem':32s} {'planner':34s} {'status':9s} {'time s':>7s} {'len':>4s} "
         f"{'cost':>7s} {'objects':>7s} {'facts':>6s} {'ground':>7s} valid"
     )
     for example, pfile, level in PROBLEMS:
@@ -84,7 +88,7 @@ def main() -> None:
             cost = "-" if r["cost"] is None else f"{r['cost']:.4g}"
             ground = "-" if r["ground_actions"] is None else str(r["ground_actions"])
             print(
-                f"{label:32s} {planner:18s} {r['status']:9s} {t:7.2f} {r['length'] or '-':>4} "
+                f"{label:32s} {planner:34s} {r['status']:9s} {t:7.2f} {r['length'] or '-':>4} "
                 f"{cost:>7s} {r['objects']:7d} {r['facts']:6d} {ground:>7s} {r['valid']}"
                 + (f"  ({r['message'][:60]})" if r["status"] != "solved" else "")
             )
