@@ -575,6 +575,9 @@ class _FocusedLoop:
             for s in streams.streams
             if eager_tests and s.is_test and module.info_for(s.name).cost <= eager_cost
         }
+        self.eager_streams = {
+            s.name for s in streams.streams if not s.is_test and module.info_for(s.name).eager
+        }
 
     def run(self) -> Solution:
         """Compile, plan, evaluate the stream plan; until a plan's facts are all real, no plan
@@ -663,9 +666,18 @@ class _FocusedLoop:
     def evaluate_cheap_functions(self) -> None:
         """The cheap cost functions and tests over real arguments, once per new real result
         (a test that passes adds facts: again until none does)."""
-        while (self.eager or self.eager_tests) and len(self.ev.results) != self.eager_seen:
+        while (self.eager or self.eager_tests or self.eager_streams) and len(
+            self.ev.results
+        ) != self.eager_seen:
             self.eager_seen = len(self.ev.results)
-            _evaluate_eagerly(self.streams, self.problem, self.eager, self.eager_tests, self.ev)
+            _evaluate_eagerly(
+                self.streams,
+                self.problem,
+                self.eager,
+                self.eager_tests,
+                self.ev,
+                self.eager_streams,
+            )
 
     def compile(self):
         """The optimistic problem of this level, constrained by the inherited plan tail."""
@@ -1086,12 +1098,24 @@ class _RealFacts:
 
 
 def _evaluate_eagerly(
-    streams: S.StreamFile, problem: S.Problem, names: set[str], tests: set[str], ev: _Evaluation
+    streams: S.StreamFile,
+    problem: S.Problem,
+    names: set[str],
+    tests: set[str],
+    ev: _Evaluation,
+    eager_streams: set[str] = frozenset(),
 ) -> None:
-    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``) whose domain
-    holds in the real facts and that have no outcome yet."""
-    for inst in real_instances(streams, problem, ev.results, functions=names, tests=tests):
+    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``), and the
+    streams whose info says ``eager`` (one draw), whose domain holds in the real facts and
+    that have no outcome yet (nor, for a stream, a draw at this level or an end)."""
+    found = real_instances(
+        streams, problem, ev.results, functions=names, tests=tests,
+        streams_with_outputs=eager_streams,
+    )
+    for inst in found:
         if inst in ev.outcomes:
+            continue
+        if inst.kind == "stream" and (inst in ev.tried or inst in ev.exhausted):
             continue
         res = Result(inst, (), (), (), 0)
         ok = ev.evaluate(res, {})

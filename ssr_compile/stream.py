@@ -50,6 +50,11 @@ class StreamInfo:
     drawn last in the stream plan is drawn again at once, as after a test's rejection.  Off
     by default: re-drawing an input re-evaluates everything downstream of it, which costs
     more than planning again where that includes motion planning (the kitchen).
+    ``eager``: the Focused solver evaluates the stream (one draw) as soon as its domain holds
+    in the real facts, before planning, as it does cheap tests; a failure is then never
+    planned with.  For a stream whose instances are few, cheap, and fail often where a plan
+    would use them (the kitchen's streams acting from the configuration the robot is in:
+    otherwise each failure cost a planner call).
     """
 
     deferrable: bool = False
@@ -59,6 +64,7 @@ class StreamInfo:
     kind: str | None = None
     constant_outputs: bool = False
     redraw_inputs: bool = False
+    eager: bool = False
 
     @classmethod
     def of(cls, value: StreamInfo | Mapping[str, Any] | None, name: str) -> StreamInfo:

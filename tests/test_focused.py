@@ -416,3 +416,52 @@ def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_pa
     assert sol.stats.planner_calls == len(sol.stats.levels)  # one call per level tried
     # while instantiation still grows, levels go on (the goal pose test above: to level 4)
     assert sol.stats.levels == sorted(set(sol.stats.levels))
+
+
+
+def test_eager_streams_are_drawn_before_planning_and_a_failure_is_never_planned_with():
+    """StreamInfo.eager: an instance whose domain holds in the real facts is drawn before the
+    first planner call; one that found nothing (b's pose out of reach) is in no stream plan;
+    the plan costs what the lazy one does."""
+    from ssr_compile.planners import get_planner
+    from ssr_compile.stream import StreamInfo
+
+    outcome = {}
+    for eager in (False, True):
+        module = fresh_module()
+        module.info["inverse-kin"] = StreamInfo(kind="function", eager=eager)
+        fixture = module.streams["inverse-kin"].__globals__
+        events: list[str] = []
+        kin = module.streams["inverse-kin"]
+
+        def logged_kin(block, pose, grasp, _kin=kin, _events=events):
+            _events.append(f"kin {block} {pose}")
+            return next(_kin(block, pose, grasp))  # a function: its first answer
+
+        module.streams["inverse-kin"] = logged_kin
+        backend = get_planner("fd")
+        plan_once = backend.solve
+
+        def logged_solve(*a, _plan=plan_once, _events=events, **k):
+            _events.append("plan")
+            return _plan(*a, **k)
+
+        backend.solve = logged_solve
+        fixture["NO_IK"].add(9.0)  # pb-far: b is never in reach (and never needed)
+        said: list[str] = []
+        try:
+            _, sol = run("problem.pddl", module=module, planner=backend, progress=said.append)
+        finally:
+            fixture["NO_IK"].clear()
+        outcome[eager] = (sol, events, said)
+    (lazy, lazy_events, _), (eager_sol, events, said) = outcome[False], outcome[True]
+    assert lazy.status == eager_sol.status == "solved"
+    assert eager_sol.cost == pytest.approx(lazy.cost)
+    values = dict(module.values)
+    _simulate(eager_sol.plan, values, {"a": values["pa"], "b": values["pb-far"]})
+    # the lazy solver draws it only once a plan asked for it
+    assert "kin b 9.0" not in lazy_events or lazy_events.index("kin b 9.0") > lazy_events.index("plan")
+    assert events.index("kin b 9.0") < events.index("plan")  # drawn before planning
+    assert events.count("kin b 9.0") == 1  # a function: one draw, then exhausted
+    plans = [line for line in said if "stream plan:" in line]
+    assert not any("inverse-kin(b, pb-far" in line for line in plans)

@@ -302,12 +302,15 @@ def real_instances(
     *,
     functions: Iterable[str] | None = None,
     tests: Iterable[str] | None = None,
+    streams_with_outputs: Iterable[str] = (),
 ) -> list[Instance]:
     """The instances of the cost functions ``functions`` and of the tests ``tests`` (``None``:
-    all of them) whose domain holds in the real facts alone: the problem's and those of the
-    ``evaluated`` results.  Functions first, each in the order of a join over the facts."""
+    all of them), and of the streams with outputs named in ``streams_with_outputs``, whose
+    domain holds in the real facts alone: the problem's and those of the ``evaluated``
+    results.  Functions first, each in the order of a join over the facts."""
     wanted_functions = None if functions is None else set(functions)
     wanted_tests = None if tests is None else set(tests)
+    wanted_streams = set(streams_with_outputs)
     levels: dict[S.Atom, int] = {}
     index: dict[str, list[S.Atom]] = defaultdict(list)
 
@@ -332,10 +335,14 @@ def real_instances(
         for binding, _facts in _matches(fn.params, fn.domain, index, levels):
             out.append(Instance(fn.name, tuple(binding[p.name] for p in fn.params), "function"))
     for stream in streams.streams:
-        if not stream.is_test or (wanted_tests is not None and stream.name not in wanted_tests):
+        if stream.is_test:
+            if wanted_tests is not None and stream.name not in wanted_tests:
+                continue
+        elif stream.name not in wanted_streams:
             continue
+        kind = "test" if stream.is_test else "stream"
         for binding, _facts in _matches(stream.inputs, stream.domain, index, levels):
-            out.append(Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), "test"))
+            out.append(Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind))
     return out
 
 
