@@ -287,8 +287,8 @@ class FastDownward(ExternalPlanner):
             raise Stop(ERROR, "out of memory")
         plan_path = _last_plan(plan_path)
         if code != 0 or plan_path is None:
-            log = search_log
-            raise Stop(ERROR, f"search failed with exit code {code}: {log_tail(log)}", log_text(log))
+            why = f"search failed with exit code {code}: {log_tail(search_log)}"
+            raise Stop(ERROR, why, log_text(search_log))
         return read_plan(plan_path)
 
     def _command(self, search: str, plan_path: str) -> list[str]:
