@@ -10,6 +10,7 @@ Downward's translator, unified-planning), which is what makes per-call overhead 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import select
@@ -202,12 +203,12 @@ class StartedCommand:
         self.proc.wait()
 
     def _feed(self, path: str) -> None:
+        # A command that stops reading (it failed, or was killed at the limit) ends the feed:
+        # its exit code or the limit says what happened, not this thread.
         try:
-            with open(path, "rb") as f:
+            with contextlib.suppress(OSError, ValueError), open(path, "rb") as f:
                 while chunk := f.read(1 << 16):
                     self.proc.stdin.write(chunk)
-        except (BrokenPipeError, ValueError, OSError):
-            pass  # the command stopped reading (it failed or was killed at the limit)
         finally:
             self._close_stdin()
 
