@@ -802,6 +802,11 @@ class _FocusedLoop:
         inst = compiled.instantiation
         needed = stream_plan(inst, pre, plan) if inst else []
         cost = (result.cost or 0.0) / compiled.scale
+        if self.problem.metric is not None and not self.backend.capabilities.costs:
+            # The planner planned with unit costs (its cost counts the compiled task's
+            # actions): the plan's cost is the metric's, over the values as planned -- the
+            # one the incumbent's is compared with, and the one reported.
+            cost = plan_cost(compiled.source_domain, compiled.source_problem, plan)
         if self.incumbent is not None and cost >= self.incumbent.cost - 1e-9:
             # Optimistic costs are lower bounds: this plan costs at least what the incumbent
             # costs.  (A suboptimal planner, asked again after a stream plan that all
@@ -1203,8 +1208,8 @@ def print_solution(solution: Solution, out=sys.stdout) -> None:
         print(f"plan ({len(solution.plan)} actions, cost {solution.cost:g}):", file=out)
         if solution.costs_ignored_by:
             print(
-                f"  (costs ignored: {solution.costs_ignored_by} plans with unit costs; the cost "
-                "above counts actions)",
+                f"  (costs ignored: {solution.costs_ignored_by} plans with unit costs, so a "
+                "cheaper plan may exist; the cost above is the plan's under the problem's metric)",
                 file=out,
             )
         for i, step in enumerate(solution.plan, 1):

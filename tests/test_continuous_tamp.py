@@ -2,7 +2,7 @@
 place) with streams written for our API (tests/fixtures/ctamp): two blocks into the goal
 region.  The Focused solver finds it with a planner that takes the ground task (pyperplan) and
 with one that takes the lifted task (Fast Downward, whose translator meets the domain's
-universal precondition); each step is checked against the 1-D geometry here.  A few seconds
+universal precondition), and through unified-planning's engines (ground); each step is checked against the 1-D geometry here.  A few seconds
 (marked slow: deselect with -m "not slow")."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ FIXTURE = Path(__file__).parent / "fixtures" / "ctamp"
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("planner", ["pyperplan", "fd"])
+@pytest.mark.parametrize("planner", ["pyperplan", "fd", "up:pyperplan", "up:fast-downward"])
 def test_two_blocks_into_the_goal_region(planner):
     corpus = require_corpus("pddlstream-examples/examples/continuous_tamp")
     domain = parse_file(corpus / "domain.pddl")

@@ -72,15 +72,21 @@ def test_cheaper_plan_chosen_with_static_cost_function(spec):
     assert result.cost == 4
 
 
-def test_up_reads_cost_functions():
-    # lama-first ignores costs and flies; the reported cost must still be the metric's.
+def test_up_fast_downward_runs_the_cost_aware_search_of_fd():
+    """unified-planning's engine defaults to LAMA's first iteration, which plans with unit
+    costs and flies (one action, cost 10); the backend asks it for fd's cost-aware search,
+    which drives (three actions, cost 4).  With the engine's own alias it flies again, and the
+    reported cost is still the metric's, priced from the problem's cost function values."""
+    from ssr_compile.planners.costs import plan_cost
+
     domain, problem = load("travel", "travel")
     result = planner("up:fast-downward").solve(domain, problem, time_limit=20)
     assert_valid(domain, problem, result)
-    # the reported cost is the metric of the returned plan, priced from the problem's own
-    # cost function values (fly = 10 whatever the engine's search thought of it)
-    from ssr_compile.planners.costs import plan_cost
-
+    assert [name for name, _ in result.actions] == ["drive"] * 3
+    assert result.cost == 4
+    lama = get_planner("up:fast-downward", params={"fast_downward_alias": "lama-first"})
+    result = lama.solve(domain, problem, time_limit=20)
+    assert_valid(domain, problem, result)
     assert result.actions == [("fly", ("home", "d"))]
     assert result.cost == plan_cost(domain, problem, result.actions) == 10
 

@@ -17,8 +17,11 @@ from ..errors import SSRError
 from ..syntax import Domain, Problem
 from .base import ERROR, SOLVED, TIMEOUT, UNSOLVABLE, Capabilities
 from .external import ExternalPlanner, Job, Stop
+from .fd import SEARCHES
 
 DEFAULT_ENGINE = "fast-downward"
+# The search string ``fd`` runs by default, without a cost bound.
+COST_AWARE_SEARCH = SEARCHES["default"].format(bound="")
 
 
 def _environment():
@@ -302,6 +305,14 @@ class UnifiedPlanning(ExternalPlanner):
         planning's ``fast-downward``, through its public ``fast_downward_translate_options``
         parameter) skips them on such tasks; "off" always, "on" never."""
         params = dict(self.params)
+        if self.engine == DEFAULT_ENGINE and not {
+            "fast_downward_alias",
+            "fast_downward_search_config",
+        } & params.keys():
+            # The engine's own default, LAMA's first iteration, plans with unit costs: the
+            # search of ``fd`` instead (LAMA's cost-aware weighted-A* stage), through the
+            # engine's public search-configuration parameter.
+            params["fast_downward_search_config"] = COST_AWARE_SEARCH
         off = self.invariants == "off" or (self.invariants == "auto" and is_chained(domain))
         if off and self.translate_options and "fast_downward_translate_options" not in params:
             params["fast_downward_translate_options"] = [
