@@ -16,7 +16,8 @@ The ratio ``driver / fd`` is the least ``up:fast-downward / fd`` can be, whateve
 does: the driver starts two Python interpreters (itself, then the translator) per call.
 Figures only, no assertions.
 
-    python bench/up_floor.py                 # 5 calls each, the small shipped problems
+    python bench/up_floor.py                 # 5 calls each, three problems (under a minute)
+    python bench/up_floor.py --full          # every shipped problem, 9 calls each
     python bench/up_floor.py --calls 9 --problems tamp2d-routes,kitchen
 """
 
@@ -57,13 +58,16 @@ def timed(fn) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--calls", type=int, default=5)
-    ap.add_argument("--problems", default=DEFAULT, help="comma-separated example/problem filters")
+    ap.add_argument("--calls", type=int, default=None, help="calls per problem (default 5)")
+    ap.add_argument("--problems", default=None, help="comma-separated example/problem filters")
+    ap.add_argument("--full", action="store_true", help="every shipped problem, 9 calls each")
     args = ap.parse_args()
+    args.calls = args.calls or (9 if args.full else 5)
+    args.problems = args.problems or ("" if args.full else DEFAULT)
     from ssr_compile.planners.up import COST_AWARE_SEARCH
 
     fd, up = get_planner("fd"), get_planner("up:fast-downward")
-    wanted = args.problems.split(",")
+    wanted = args.problems.split(",")  # "" matches every problem
     print(f"{'problem':32s} {'fd s':>7s} {'driver s':>9s} {'up s':>7s} {'driver/fd':>10s} {'up/fd':>7s}")
     for example, pfile, level in SHIPPED_PROBLEMS:
         label = f"{example}/{pfile.removesuffix('.pddl')}"
