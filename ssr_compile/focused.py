@@ -920,6 +920,16 @@ class _FocusedLoop:
         after_failure: set[int] = set()  # results drawing again after a failed draw
         producer = {o: r for r in ordered for o in r.outputs}
         position = {id(r): i for i, r in enumerate(ordered)}
+        # Draws again after rejections, per result: ``resample`` for each other draw of this
+        # stream plan that a test checks its outputs against (a placement among k others
+        # drawn for the same plan must miss each of them: the draws it needs grow with k).
+        partners: dict[int, set[int]] = {id(r): set() for r in ordered}
+        for t in ordered:
+            if t.instance.kind == "test":
+                ids = {id(producer[x]) for x in t.instance.inputs if x in producer}
+                for rid in ids:
+                    partners[rid] |= ids - {rid}
+        rejected_limit = {rid: self.resample * max(len(p), 1) for rid, p in partners.items()}
         self.stream_plan_ok = False
         while True:
             failed: set[str] = set()
@@ -992,7 +1002,7 @@ class _FocusedLoop:
                     blamed.sort(key=lambda r: position[id(r)], reverse=True)
                     redraw += [
                         r
-                        for r in self._to_redraw(blamed, drawn, again, binding, self.resample)[:1]
+                        for r in self._to_redraw(blamed, drawn, again, binding, rejected_limit)[:1]
                         if all(r is not x for x in redraw)
                     ]
             if all_ok or not redraw:
@@ -1026,15 +1036,17 @@ class _FocusedLoop:
         drawn: set[int],
         again: dict[int, int],
         binding: dict,
-        limit: int,
+        limit: int | dict[int, int],
     ) -> list[Result]:
         """Those of ``blamed`` to draw again now: generator results drawn afresh in this
-        evaluation, not exhausted, that have drawn again fewer than ``limit`` times."""
+        evaluation, not exhausted, that have drawn again fewer than ``limit`` times (a number,
+        or one per result id)."""
         out = []
         for r in blamed:
             if r.instance.kind != "stream" or id(r) not in drawn:
                 continue
-            if again.get(id(r), 0) >= limit:
+            most = limit if isinstance(limit, int) else limit.get(id(r), 0)
+            if again.get(id(r), 0) >= most:
                 continue
             if _bound(r, binding) not in self.ev.exhausted and all(x is not r for x in out):
                 out.append(r)

@@ -191,3 +191,70 @@ def test_a_compile_that_would_end_past_the_time_limit_is_not_started(monkeypatch
     assert "too little left to compile the next problem" in sol.message
     assert sol.stats.iterations == 2
     assert took < 3.0
+
+
+def _row_of_blocks(n: int, room: float = 0.8):
+    """``n`` blocks of width 0.5 on the table, to put into a goal region ``room`` long per block
+    (0.8: the placements must pack to 62% of it)."""
+    values = {"q0": T.Conf(-5.0, 3.0), "rtable": T.Region(-5.5, 2.5),
+              "rgoal": T.Region(3.0, round(3.0 + room * n, 3))}  # fmt: skip
+    objects, init, goal = ["q0", "rtable", "rgoal"], ["(Region rtable) (Region rgoal)"], []
+    init.append("(Conf q0) (AtConf q0) (HandEmpty)")
+    for i in range(n):
+        b, p = f"b{i}", f"p{i}"
+        values[b], values[p] = T.Block(b, 0.5, 0.8), T.Pose(round(-5.0 + 0.9 * i, 3))
+        objects += [b, p]
+        init.append(f"(Block {b}) (Pose {b} {p}) (AtPose {b} {p}) (Contained {b} {p} rtable)")
+        goal.append(f"(In {b} rgoal)")
+    text = (
+        f"(define (problem row) (:domain tamp2d) (:objects {' '.join(objects)})"
+        f" (:init {' '.join(init)} (= (total-cost) 0)) (:goal (and {' '.join(goal)}))"
+        " (:metric minimize (total-cost)))"
+    )
+    return parse_problem(text), values
+
+
+def _most_redraws_per_stream_plan(said: list[str]) -> list[int]:
+    """For each stream plan evaluated, the most times one result was drawn again in it."""
+    out: list[int] = []
+    counts: dict[str, int] | None = None
+    for line in said:
+        if line.startswith("stream plan:"):
+            counts = {}
+            out.append(0)
+        elif line.startswith("drawing again:") and counts is not None:
+            for r in line.removeprefix("drawing again: ").split("), "):
+                key = r.rstrip(")")
+                counts[key] = counts.get(key, 0) + 1
+                out[-1] = max(out[-1], counts[key])
+        elif line.startswith("iteration"):
+            counts = None
+    return out
+
+
+def test_a_draw_tested_against_more_draws_may_be_drawn_again_more_often():
+    """``resample`` counts per other draw of the stream plan a test checks a value against: a
+    placement among four others drawn for the same plan (five blocks into a tight region) may
+    be drawn again 2 x 4 times; one checked against a single other draw, twice."""
+    d = parse_domain((TAMP2D / "domain.pddl").read_text())
+    s = parse_stream_file((TAMP2D / "stream.pddl").read_text())
+    problem, values = _row_of_blocks(5)
+    said: list[str] = []
+    sol = solve(
+        d, s, problem, replace(T.make_module(0), values=values), planner="fd", time_limit=60,
+        progress=said.append, resample=2,
+    )  # fmt: skip
+    assert sol.status == "solved", sol.message
+    most = _most_redraws_per_stream_plan([x.strip() for x in said])
+    assert 2 < max(most) <= 8
+    placed = sorted(st.values[1].x for st in sol.plan if st.name == "place")
+    assert len(placed) == 5 and all(b - a >= 0.5 - 1e-9 for a, b in zip(placed, placed[1:]))
+    # two blocks, each placement checked against the other's: at most twice, as before
+    problem, values = _row_of_blocks(2)
+    said = []
+    sol = solve(
+        d, s, problem, replace(T.make_module(0), values=values), planner="fd", time_limit=60,
+        progress=said.append, resample=2,
+    )  # fmt: skip
+    assert sol.status == "solved", sol.message
+    assert max(_most_redraws_per_stream_plan([x.strip() for x in said]), default=0) <= 2
