@@ -88,8 +88,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
         type=_count,
         default=None,
         metavar="N",
-        help="the solver draws a rejected draw again at once up to N times per stream plan "
-        "(default 2; 0: off, the Focused loop as the paper has it)",
+        help="the solver draws a rejected draw again at once up to N times per other draw of "
+        "the stream plan it is tested against (default 2; 0: off, the Focused loop as the "
+        "paper has it)",
     )
     p.add_argument("--log", metavar="FILE.jsonl", help="write one JSON line per cycle to FILE")
     p.add_argument("--gif", metavar="FILE", help="an animation of the episode (kitchen tasks)")

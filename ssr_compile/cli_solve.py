@@ -100,9 +100,10 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "--resample",
         type=_check_resample,
         metavar="N",
-        help="a generator whose draw failed, or was rejected by a test of the stream plan, "
-        "draws again at once, up to N times per stream plan, before the planner is called "
-        "again (default 2; 0: off); or example.toml's",
+        help="a generator whose draw was rejected by a test of the stream plan draws again at "
+        "once, up to N times per other draw of the plan the test checks it against (a "
+        "placement among six others: 6N), and one whose draw failed once, before the planner "
+        "is called again (default 2; 0: off); or example.toml's",
     )
     p.add_argument(
         "--seed",

@@ -422,9 +422,10 @@ def solve(
     unsolvable, at a cost exponential in the number of objects to arrange); off by default
     (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
     ``resample``: a generator of the stream plan whose draw was rejected by one of the plan's
-    tests draws again at once, up to this many times per stream plan, and what depends on it
-    is evaluated again -- a stream call instead of a planner call; one whose draw failed draws
-    again once, while that pays off for its stream (``0``: off).
+    tests draws again at once, up to this many times per other draw of the stream plan that
+    a test checks it against (at least once over), and what depends on it is evaluated again
+    -- a stream call instead of a planner call; one whose draw failed draws again once, while
+    that pays off for its stream (``0``: off).
     ``accept_drawn``: when every result of a stream plan succeeds and the plan, with the
     values drawn, is valid and costs no more than planned, it is the solution (no planner call
     to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
