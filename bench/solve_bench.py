@@ -14,13 +14,19 @@ SPEC...`` the same with planner backends (``'[prestart=0]'``: the example's own,
 option).  ``--seeds 0-9`` runs each cell with each seed of the streams (a plan's cost depends
 on the values drawn: one seed's is one sample).
 
-Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE] [--algorithm NAME...] [--planner SPEC...] [--seeds SEEDS]
+``--fresh`` runs each solve in a fresh Python process (the solve call alone timed, with the
+first-time costs a command pays inside it: imports, the planner's worker; the reference
+implementation was measured so).
+
+Run: python bench/solve_bench.py [--full] [--runs N] [--time-limit S] [--only NAME[:PROBLEM]] [--no-defer] [--option KEY=VALUE] [--algorithm NAME...] [--planner SPEC...] [--seeds SEEDS] [--fresh]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -116,6 +122,26 @@ def run_once(
     return sol.status, elapsed, sol.stats.planner_calls, calls, cost, size
 
 
+def run_fresh(name: str, *args) -> tuple:
+    """:func:`run_once` in a fresh Python process (its imports, the planner's worker and every
+    first-time cost inside the solve call, as a user's command pays them); only the solve call
+    is timed, as in-process."""
+    job = json.dumps([name, *args])
+    out = subprocess.run(
+        [sys.executable, __file__, "--one-run", job], capture_output=True, text=True, check=False
+    )
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr.strip().splitlines()[-1] if out.stderr.strip() else "failed")
+    status, elapsed, calls, streams, cost, size = json.loads(out.stdout.strip().splitlines()[-1])
+    return status, elapsed, calls, streams, cost, tuple(size) if size else None
+
+
+def _one_run(job: str) -> None:
+    name, *args = json.loads(job)
+    folder, config = dict(examples())[name]
+    print(json.dumps(run_once(folder, config, *args)))
+
+
 def selected(name: str, problem: str, only: list[str]) -> bool:
     if not only:
         return True
@@ -171,7 +197,16 @@ def main() -> None:
         help="the streams' seeds, e.g. 0-9 (default 0); with several, each row's cost is the "
         "median over them and a last column gives their mean",
     )
+    ap.add_argument(
+        "--fresh",
+        action="store_true",
+        help="each run in a fresh Python process (first-time costs inside the solve call, as "
+        "a command pays them; the reference was measured so); in-process by default",
+    )
+    ap.add_argument("--one-run", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.one_run:
+        return _one_run(args.one_run)
     seeds = parse_seeds(args.seeds)
     options = {}
     for o in args.option:
@@ -199,8 +234,13 @@ def main() -> None:
                 try:
                     for _, seed in ((r, sd) for sd in seeds for r in range(args.runs)):
                         for algorithm, planner in rows:
+                            run = (
+                                (lambda *a: run_fresh(name, *a[2:]))
+                                if args.fresh
+                                else run_once
+                            )
                             rows[algorithm, planner].append(
-                                run_once(
+                                run(
                                     folder,
                                     config,
                                     problem,
