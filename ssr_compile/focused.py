@@ -534,9 +534,6 @@ class _FocusedLoop:
         self.domain, self.streams, self.problem, self.module = domain, streams, problem, module
         self.state = state
         self.backend = get_planner(planner) if isinstance(planner, str) else planner
-        warm_up = getattr(self.backend, "warm_up", None)
-        if warm_up is not None:
-            warm_up()  # the planner starts beside the first compilation (fd's translator)
         module.check_against(streams)
         self.stats = Statistics()
         self.values = state.values

@@ -4,7 +4,6 @@ limits, name mapping, cost bounds and the entry-point registry."""
 from __future__ import annotations
 
 import importlib.metadata
-import os
 import time
 from pathlib import Path
 
@@ -249,59 +248,6 @@ def test_forked_worker_killed_on_timeout_and_replaced():
         assert worker.call((0.0,), timeout=5) == ("ok", 0.0) and worker.pid != first
     finally:
         worker.close()
-
-
-def _echo_or_fail(value):
-    if value == "fail":
-        raise RuntimeError("warm-up failed")
-    if isinstance(value, (int, float)):
-        time.sleep(value)
-    return value
-
-
-def test_forked_worker_warm_up_runs_beside_the_caller_and_its_answer_is_not_the_next_calls():
-    from ssr_compile.planners.proc import ForkedWorker
-
-    worker = ForkedWorker(_echo_or_fail)
-    try:
-        folders: list[str] = []
-
-        def args(folder):
-            folders.append(folder)
-            return (0.3,)
-
-        start = time.monotonic()
-        assert worker.warm(args) is True
-        assert time.monotonic() - start < 0.25  # it did not wait for the warm-up
-        assert os.path.isdir(folders[0])
-        assert worker.warm(args) is False  # a worker runs: nothing to warm
-        assert worker.call(("real",), timeout=5) == ("ok", "real")  # after the warm-up's 0.3 s
-        assert not os.path.exists(folders[0])  # the warm-up's folder is gone
-        assert worker.call(("again",), timeout=5) == ("ok", "again")
-        # the call's limit counts the warm-up it waits for
-        worker.close()
-        assert worker.warm(lambda folder: (30,)) is True
-        start = time.monotonic()
-        assert worker.call(("late",), timeout=0.5) == ("timeout", None)
-        assert time.monotonic() - start < 1.5 and worker.pid is None
-        # a warm-up that fails leaves the worker serving
-        assert worker.warm(lambda folder: ("fail",)) is True
-        assert worker.call(("after",), timeout=5) == ("ok", "after")
-    finally:
-        worker.close()
-
-
-def test_fd_warm_up_starts_the_translator_worker_and_plans_the_same():
-    from ssr_compile.planners import fd
-
-    domain, problem = load("blocks", "blocks")
-    fd._TRANSLATOR.close()
-    backend = get_planner("fd")
-    assert backend.warm_up() is True and fd._TRANSLATOR.pid is not None
-    assert backend.warm_up() is False
-    result = backend.solve(domain, problem, time_limit=10)
-    assert_valid(domain, problem, result)
-    assert fd._TRANSLATOR._pending is None
 
 
 def test_fd_first_call_with_a_fresh_translator_worker():

@@ -2,8 +2,7 @@
 
 One call writes the task as canonical PDDL into a fresh temporary directory, runs Fast
 Downward's Python translator in a forked worker process (the translator modules are imported
-by the worker, once, on its first call, or on a warm-up translation the solver asks for at its
-start, beside its first compilation; the worker is kept between calls, so a call pays neither
+once, in the parent, before the fork; the worker is kept between calls, so a call pays neither
 an interpreter start nor a fork; it is killed and re-forked when a call times out), then runs the
 ``downward`` search binary shipped by the ``up_fast_downward`` package as a subprocess in its
 own process group, reading the SAS file (started while the translator works, so that its own
@@ -139,26 +138,6 @@ def _translate(
 _TRANSLATOR = proc.ForkedWorker(_translate)
 atexit.register(_TRANSLATOR.close)
 
-# A small task using what compiled tasks use (types, a derived predicate under negation, a
-# universal precondition, action costs), translated once by a fresh worker to warm it up.
-_WARM_DOMAIN = """(define (domain warm) (:requirements :adl :derived-predicates :action-costs)
- (:types thing) (:predicates (at ?x - thing) (done ?x - thing) (blocked ?x - thing))
- (:functions (total-cost) - number)
- (:derived (blocked ?x - thing) (exists (?y - thing) (and (at ?y) (not (= ?x ?y)))))
- (:action finish :parameters (?x - thing)
-  :precondition (and (at ?x) (not (blocked ?x)) (forall (?y - thing) (not (done ?y))))
-  :effect (and (done ?x) (not (at ?x)) (increase (total-cost) 1))))"""
-_WARM_PROBLEM = """(define (problem warm) (:domain warm) (:objects a b - thing)
- (:init (at a) (= (total-cost) 0)) (:goal (done a)) (:metric minimize (total-cost)))"""
-
-
-def _warm_args(folder: str) -> tuple:
-    paths = [os.path.join(folder, name) for name in ("domain.pddl", "problem.pddl", "out.sas")]
-    for path, text in zip(paths, (_WARM_DOMAIN, _WARM_PROBLEM)):
-        with open(path, "w") as f:
-            f.write(text)
-    return (*paths, True)
-
 
 def read_plan(path: str) -> list[tuple[str, tuple[str, ...]]]:
     """Ground actions of a Fast Downward plan file (``(name arg ...)`` per line)."""
@@ -207,11 +186,9 @@ class FastDownward(ExternalPlanner):
             conditional_effects=True,
             optimal=search in OPTIMAL,
         )
-        if not proc.can_fork():
-            import fast_downward.translate.main  # noqa: F401  (in-process calls: now)
-        # With a worker, the translator is imported there, on its first call (a warm-up,
-        # :meth:`warm_up`, beside the caller's own work): not in this process, where it took
-        # 30 ms of every command's start.
+        # Import the translator now, so that every forked call finds it loaded.
+        import fast_downward.translate.main  # noqa: F401
+
         self.binary = search_binary()
         self.last_operators: int | None = None  # ground actions of the last translated task
 
@@ -226,13 +203,6 @@ class FastDownward(ExternalPlanner):
 
     def before(self, domain: Domain, problem: Problem) -> None:
         self.last_operators = None
-
-    def warm_up(self) -> bool:
-        """Start the translator's worker now, if none runs, and have it translate a small task
-        while the caller goes on (compiling its first problem): a fresh worker's first
-        translation is slower than the next ones (pages copied on write, the translator's
-        first-time set-up).  True when a worker was started."""
-        return _TRANSLATOR.warm(_warm_args)
 
     def refuse(self, domain: Domain, problem: Problem) -> str | None:
         refusal = super().refuse(domain, problem)

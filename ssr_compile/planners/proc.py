@@ -393,7 +393,6 @@ class ForkedWorker:
         self.pid: int | None = None
         self._calls = 0
         self._lock = threading.Lock()
-        self._pending: str | None = None  # a warm-up request's folder, its answer not read yet
 
     def _start(self) -> None:
         req_r, req_w = os.pipe()
@@ -433,8 +432,6 @@ class ForkedWorker:
             _send(res, payload)
 
     def _stop(self) -> None:
-        _remove(self._pending)
-        self._pending = None
         if self.pid is None:
             return
         _kill_tree(self.pid)
@@ -442,40 +439,6 @@ class ForkedWorker:
         os.close(self._req)
         os.close(self._res)
         self.pid = None
-
-    def _forget(self) -> None:
-        """The worker died and was reaped: close its pipes, drop a warm-up's folder."""
-        os.close(self._req)
-        os.close(self._res)
-        _remove(self._pending)
-        self._pending = None
-        self.pid = None
-
-    def warm(self, make_args: Callable[[str], tuple]) -> bool:
-        """Fork the worker now, if there is none, and have it run ``fn`` once on
-        ``make_args(folder)`` (a private folder) without waiting: a fresh worker's first call
-        pays for its start (the copy-on-write pages it touches, the function's first-time
-        set-up), and the caller goes on with its own work meanwhile, on another core.  The next
-        :meth:`call` reads that answer first.  False (nothing done) when a worker is running
-        or forking is not available."""
-        if not can_fork():
-            return False
-        with self._lock:
-            if self.pid is not None and os.waitpid(self.pid, os.WNOHANG) == (0, 0):
-                return False
-            if self.pid is not None:
-                self._forget()
-            self._start()
-            self._calls = 1
-            folder = _private_tmpdir()
-            try:
-                _send(self._req, (make_args(folder), None, folder))
-            except BaseException:
-                _remove(folder)
-                self._stop()
-                raise
-            self._pending = folder
-            return True
 
     def close(self) -> None:
         """Stop the worker and reap it (registered with :mod:`atexit` by its users, so that no
@@ -490,7 +453,10 @@ class ForkedWorker:
             return run_forked(self.fn, args, timeout=timeout, log_path=log_path)
         with self._lock:
             if self.pid is not None and os.waitpid(self.pid, os.WNOHANG) != (0, 0):
-                self._forget()  # died since the last call (already reaped by the check)
+                # died since the last call (already reaped by the check): its pipes go too
+                os.close(self._req)
+                os.close(self._res)
+                self.pid = None
             if self.pid is not None and self._calls >= self.max_calls:
                 self._stop()
             if self.pid is None:
@@ -506,45 +472,26 @@ class ForkedWorker:
     def _call(self, args: tuple, timeout: float, log_path: str | None, tmpdir: str):
         """One request to the running worker (the lock is held by :meth:`call`)."""
         deadline = time.monotonic() + max(timeout, 0.0)
-        if self._pending is not None:
-            # The warm-up's answer comes first; it is discarded (it only warmed the worker).
-            # A warm-up that failed or ran out of time leaves no worker: a fresh one serves.
-            try:
-                status, _ = self._answer(deadline)
-            except BaseException:
-                self._stop()
-                raise
-            _remove(self._pending)
-            self._pending = None
-            if status == TIMED_OUT:
-                return TIMED_OUT, None
-            if self.pid is None:
-                self._start()
-                self._calls = 1
         try:
             _send(self._req, (args, log_path, tmpdir))
-            return self._answer(deadline)
+            buf = b""
+            size = None
+            while size is None or len(buf) < 8 + size:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    self._stop()
+                    return TIMED_OUT, None
+                ready, _, _ = select.select([self._res], [], [], left)
+                if not ready:
+                    continue
+                chunk = os.read(self._res, 1 << 16)
+                if not chunk:
+                    self._stop()
+                    return FAILED, "worker process died"
+                buf += chunk
+                if size is None and len(buf) >= 8:
+                    size = int.from_bytes(buf[:8], "little")
+            return pickle.loads(buf[8:])
         except BaseException:
             self._stop()
             raise
-
-    def _answer(self, deadline: float) -> tuple[str, Any]:
-        """The worker's answer to the request sent last, read before ``deadline``."""
-        buf = b""
-        size = None
-        while size is None or len(buf) < 8 + size:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                self._stop()
-                return TIMED_OUT, None
-            ready, _, _ = select.select([self._res], [], [], left)
-            if not ready:
-                continue
-            chunk = os.read(self._res, 1 << 16)
-            if not chunk:
-                self._stop()
-                return FAILED, "worker process died"
-            buf += chunk
-            if size is None and len(buf) >= 8:
-                size = int.from_bytes(buf[:8], "little")
-        return pickle.loads(buf[8:])
