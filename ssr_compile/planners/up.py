@@ -21,7 +21,7 @@ from .fd import SEARCHES
 
 DEFAULT_ENGINE = "fast-downward"
 # The search string ``fd`` runs by default, without a cost bound.
-COST_AWARE_SEARCH = SEARCHES["default"].format(bound="")
+COST_AWARE_SEARCH = SEARCHES["default"].replace("{bound}", "")
 
 
 def _environment():
