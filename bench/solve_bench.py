@@ -170,9 +170,10 @@ def main() -> None:
     ap.add_argument(
         "--algorithm",
         nargs="+",
-        default=["focused"],
+        default=[None],
         metavar="NAME",
-        help="the solver's algorithm(s): focused, adaptive; several: interleaved runs, a row each",
+        help="the solver's algorithm(s): focused, adaptive (default: each example's, as its "
+        "example.toml says, else focused); several: interleaved runs, a row each",
     )
     ap.add_argument(
         "--option",
@@ -229,7 +230,9 @@ def main() -> None:
                 continue
             for defer in (False,) if args.no_defer else (False, True):
                 rows: dict[tuple, list] = {
-                    (a, pl): [] for a in args.algorithm for pl in args.planner
+                    (a or config.get("algorithm", "focused"), pl): []
+                    for a in args.algorithm
+                    for pl in args.planner
                 }
                 try:
                     for _, seed in ((r, sd) for sd in seeds for r in range(args.runs)):

@@ -262,11 +262,13 @@ def test_resample_is_a_setting_with_the_solvers_default(capsys):
     from ssr_compile.focused import RESAMPLE
 
     assert DEFAULTS["resample"] == RESAMPLE
-    assert main(["solve", "tamp2d", "--problem", "problem", "--resample", "0", "-v"]) == 0
+    # the Focused loop's drawing again (tamp2d's example.toml picks the adaptive algorithm)
+    focused = ["--algorithm", "focused"]
+    assert main(["solve", "tamp2d", "--problem", "problem", "--resample", "0", "-v", *focused]) == 0
     err = capsys.readouterr().err
     assert "resample    0  (flag --resample)" in err
     assert "drawing again" not in err  # off: sample-grasp's failed first draw is planned around
-    assert main(["solve", "tamp2d", "--problem", "problem", "-v"]) == 0
+    assert main(["solve", "tamp2d", "--problem", "problem", "-v", *focused]) == 0
     err = capsys.readouterr().err
     assert f"resample    {RESAMPLE}  (default)" in err and "drawing again: sample-grasp" in err
     with pytest.raises(SystemExit) as exit_:
