@@ -237,22 +237,18 @@ def main() -> None:
                 try:
                     for _, seed in ((r, sd) for sd in seeds for r in range(args.runs)):
                         for algorithm, planner in rows:
-                            run = (
-                                (lambda *a: run_fresh(name, *a[2:]))
-                                if args.fresh
-                                else run_once
+                            job = (
+                                problem,
+                                defer,
+                                args.time_limit,
+                                {**options, "algorithm": algorithm},
+                                planner,
+                                seed,
                             )
                             rows[algorithm, planner].append(
-                                run(
-                                    folder,
-                                    config,
-                                    problem,
-                                    defer,
-                                    args.time_limit,
-                                    {**options, "algorithm": algorithm},
-                                    planner,
-                                    seed,
-                                )
+                                run_fresh(name, *job)
+                                if args.fresh
+                                else run_once(folder, config, *job)
                             )
                 except Exception as e:  # noqa: BLE001 - a broken example is a row, not a crash
                     print(f"{name:16s} {problem:22s} {str(defer):5s} error: {e}")
