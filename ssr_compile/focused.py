@@ -30,6 +30,7 @@ from . import syntax as S
 from .compile.instantiate import Instance, Result, ground_atom, real_instances
 from .compile.pipeline import compile_problem
 from .errors import InstanceCapReached, PlannerFailure, SSRError, StreamError, StreamFailure
+from .planners import fd as _default_backend  # noqa: F401 - the default, loaded with the solver
 from .planners.base import UNSOLVABLE
 from .planners.costs import plan_cost
 from .preimage import PlanInvalid, plan_preimage, stream_plan

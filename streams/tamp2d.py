@@ -51,6 +51,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
+import numpy.random  # noqa: F401 - numpy loads it lazily, at the first sample otherwise
 
 from ssr_compile import syntax as S
 from ssr_compile.stream import StreamInfo, StreamsModule

@@ -207,6 +207,27 @@ def test_third_party_entry_point(monkeypatch, request):
     assert rows["echo"]["entry_point"].endswith(":make_echo")
 
 
+def test_a_builtin_name_loads_without_reading_entry_points_and_cannot_be_shadowed(
+    monkeypatch, request
+):
+    read = []
+    shadow = importlib.metadata.EntryPoint(name="fd", value=f"{__name__}:make_echo", group=GROUP)
+
+    def entry_points(**params):
+        read.append(params)
+        return [shadow] if params.get("group") == GROUP else []
+
+    monkeypatch.setattr("ssr_compile.planners.entry_points", entry_points)
+    _installed.cache_clear()
+    request.addfinalizer(_installed.cache_clear)
+    assert get_planner("fd").name == "fd" and get_planner("fd:opt").name == "fd:opt"
+    assert read == []  # the metadata scan is for third-party names only
+    assert available_planners()["fd"].value == "ssr_compile.planners.fd:make_planner"
+    with pytest.raises(SSRError, match="unknown planner 'nope'"):
+        get_planner("nope")
+    assert read  # an unknown name does look at what is installed
+
+
 def test_describe_lists_builtins_with_capabilities():
     rows = {row["name"]: row for row in describe_planners()}
     assert {"fd", "fd:opt", "pyperplan", "up:fast-downward"} <= set(rows)

@@ -36,6 +36,15 @@ from .base import ERROR, TIMEOUT, UNSOLVABLE, Capabilities, describe_variants
 from .costs import fractional_costs
 from .external import ExternalPlanner, Job, Stop, log_tail, log_text, read_plan_file
 
+# The translator's modules load with this one (about 15 ms), as the reference implementation
+# loads its own with its solver: every forked translation finds them loaded, and a first solve
+# does not pay their import inside its call.  When they are missing, making an fd planner
+# says so.
+try:
+    import fast_downward.translate.main  # noqa: F401
+except ImportError:
+    pass
+
 # Search configurations; ``{bound}`` receives ``,bound=N`` when a cost bound is given.
 # "default" is cost-aware (LAMA's weighted-A* stage: ff + landmarks with costs plus one) and
 # works with axioms; "lama-first" ignores costs (it is unified-planning's fast-downward);
@@ -186,8 +195,7 @@ class FastDownward(ExternalPlanner):
             conditional_effects=True,
             optimal=search in OPTIMAL,
         )
-        # Import the translator now, so that every forked call finds it loaded.
-        import fast_downward.translate.main  # noqa: F401
+        import fast_downward.translate.main  # noqa: F401 - missing: fail here, not per call
 
         self.binary = search_binary()
         self.last_operators: int | None = None  # ground actions of the last translated task
