@@ -39,9 +39,9 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from ssr_compile.experiment import parse_seeds  # noqa: E402
 from ssr_compile.focused import solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
-from ssr_compile.experiment import parse_seeds  # noqa: E402
 from ssr_compile.stream import module_for_problem  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -73,6 +73,17 @@ if CORPUS_CTAMP.is_dir():
 
 
 LONG = {"kitchen"}  # examples only --full (or --only) runs
+
+# pddlstream's solve times (s) on the same files and stream functions, no deferral, medians of
+# 5 in fresh processes, from the issue that set the solver's targets (pddlstream is not
+# installable from the package registry, so it cannot run here).  With --fresh, rows without
+# deferral print the ratio of their median to it.
+REFERENCE = {
+    ("tamp2d", "problem.pddl"): 0.088,
+    ("tamp2d", "problem-blocked.pddl"): 0.58,
+    ("tamp2d-routes", "problem.pddl"): 0.107,
+    ("continuous_tamp", "problem.pddl"): 0.16,
+}
 
 
 def examples():
@@ -213,7 +224,9 @@ def main() -> None:
     for o in args.option:
         key, _, value = o.partition("=")
         options[key] = float(value) if "." in value else int(value) if value.isdigit() else value
-    options = {k: bool(v) if k in ("share", "eager_tests", "leaves") else v for k, v in options.items()}
+    options = {
+        k: bool(v) if k in ("share", "eager_tests", "leaves") else v for k, v in options.items()
+    }
     args.runs = args.runs or (5 if args.full else 1)
     head = (
         f"{'example':16s} {'problem':22s} {'defer':5s} {'algorithm':9s} {'status':8s} {'median s':>9s} "
@@ -253,17 +266,23 @@ def main() -> None:
                 except Exception as e:  # noqa: BLE001 - a broken example is a row, not a crash
                     print(f"{name:16s} {problem:22s} {str(defer):5s} error: {e}")
                     continue
+                reference = REFERENCE.get((name, problem)) if args.fresh and not defer else None
                 for (algorithm, planner), runs in rows.items():
                     label = planner or ""
-                    print_row(name, problem, defer, algorithm, runs, label, len(seeds) > 1)
+                    print_row(
+                        name, problem, defer, algorithm, runs, label, len(seeds) > 1, reference
+                    )
+    if args.fresh:
+        print("(vs pddlstream: its median in a fresh process, from the issue; ratio ours / its)")
 
 
-def print_row(name, problem, defer, algorithm, rows, planner="", mean=False) -> None:
+def print_row(
+    name, problem, defer, algorithm, rows, planner="", mean=False, reference=None
+) -> None:
     statuses = {r[0] for r in rows}
     sizes = [r[5] for r in rows if r[5] is not None]
     size = (
-        f"{statistics.median(z[0] for z in sizes):.0f}/"
-        f"{statistics.median(z[1] for z in sizes):.0f}"
+        f"{statistics.median(z[0] for z in sizes):.0f}/{statistics.median(z[1] for z in sizes):.0f}"
         if sizes
         else "-"
     )
@@ -274,9 +293,16 @@ def print_row(name, problem, defer, algorithm, rows, planner="", mean=False) -> 
         f"{statistics.median(r[3] for r in rows):7.0f} "
         f"{statistics.median(r[4] for r in rows):8.2f} {size:>14s}"
         + (f" mean cost {statistics.fmean(r[4] for r in rows):.2f}" if mean else "")
+        + (
+            f"  vs pddlstream {reference:.3f} s: "
+            f"{statistics.median(r[1] for r in rows) / reference:.2f}x"
+            if reference
+            else ""
+        )
         + (f"  {planner}" if planner else ""),
         flush=True,
     )
+
 
 if __name__ == "__main__":
     main()
