@@ -11,6 +11,7 @@ Downward's translator, unified-planning), which is what makes per-call overhead 
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import pickle
 import select
@@ -298,6 +299,7 @@ def _run_forked(fn, args, timeout: float, log_path: str | None, tmpdir: str) -> 
             os.close(read_fd)
             os.setsid()
             _child_setup(tmpdir)
+            gc.freeze()  # the parent's objects: never scanned here (nor copied on write)
             out = os.open(log_path or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
             os.dup2(out, 1)
             os.dup2(out, 2)
@@ -385,6 +387,11 @@ class ForkedWorker:
     request that exceeds its time limit kills the worker (and everything it started); the next
     request forks a fresh one.  The worker exits when the parent closes its end of the pipe,
     including when the parent dies.
+
+    Python's cyclic garbage collector: the objects inherited from the parent are frozen in the
+    child (never scanned, so their pages are not copied for it), and it is off during a call,
+    which collects its garbage after its answer is sent, while the parent reads it: the
+    kitchen's Stow spent 7.5 s in 21 planner calls, 5.0 s so.
     """
 
     def __init__(self, fn: Callable[..., Any], *, max_calls: int = 500):
@@ -404,6 +411,7 @@ class ForkedWorker:
                 os.close(res_r)
                 os.setsid()
                 _child_setup(None)
+                gc.freeze()  # what the parent made: never scanned here (nor copied on write)
                 self._serve(req_r, res_w)
             finally:
                 os._exit(0)
@@ -422,6 +430,7 @@ class ForkedWorker:
             os.dup2(out, 1)
             os.dup2(out, 2)
             os.close(out)
+            gc.disable()
             try:
                 payload = (OK, self.fn(*args))
             except BaseException as e:  # noqa: BLE001
@@ -430,6 +439,8 @@ class ForkedWorker:
             sys.stdout.flush()
             sys.stderr.flush()
             _send(res, payload)
+            gc.collect()  # the call's garbage, once the answer is on its way
+            gc.enable()
 
     def _stop(self) -> None:
         if self.pid is None:
