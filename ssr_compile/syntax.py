@@ -84,6 +84,19 @@ class Const:
 
 Term = Union[Var, Const]
 
+_CONSTS: dict[str, Const] = {}
+
+
+def const(name: str) -> Const:
+    """The :class:`Const` named ``name``, one object per name (its hash computed once): the
+    compiler grounds hundreds of thousands of atoms over a few thousand names."""
+    c = _CONSTS.get(name)
+    if c is None:
+        if len(_CONSTS) >= 1_000_000:  # a bound, for processes that live long
+            _CONSTS.clear()
+        c = _CONSTS[name] = Const(name)
+    return c
+
 
 @node
 class Num:

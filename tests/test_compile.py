@@ -591,3 +591,15 @@ def test_optimistic_names_accepted_by_every_reader():
     assert set(shared.merged) <= emitted and merged and merged.isdisjoint(emitted)
     assert opt - merged <= emitted  # not renamed: already plain identifiers
     up_read(c.domain, c.problem)
+
+
+def test_ground_atoms_share_one_const_per_name_and_equal_freshly_built_ones():
+    from ssr_compile.compile.instantiate import ground_atom
+
+    pattern = S.Atom("kin", (S.Var("?b"), S.Const("q0"), S.Var("?p")))
+    a = ground_atom(pattern, {"?b": "b1", "?p": "p-3"})
+    b = ground_atom(pattern, {"?b": "b1", "?p": "p-4"})
+    assert a.args[0] is b.args[0] and a.args[1] is pattern.args[1]  # interned, or kept
+    assert a == S.Atom("kin", (S.Const("b1"), S.Const("q0"), S.Const("p-3")))
+    assert hash(a) == hash(S.Atom("kin", (S.Const("b1"), S.Const("q0"), S.Const("p-3"))))
+    assert S.const("b1") is a.args[0] and S.const("b1") == S.Const("b1")

@@ -197,7 +197,7 @@ def share_leaves(
 
     def rename(fact):
         if isinstance(fact, S.Atom) and any(t.name in alias for t in fact.args):
-            return S.Atom(fact.pred, tuple(S.Const(alias.get(t.name, t.name)) for t in fact.args))
+            return S.Atom(fact.pred, tuple(S.const(alias.get(t.name, t.name)) for t in fact.args))
         return fact
 
     init = tuple(dict.fromkeys(rename(f) for f in problem.init))
