@@ -94,6 +94,26 @@ def objects_as_constants(domain: S.Domain, problem: S.Problem) -> PassResult:
     )
 
 
+@contextlib.contextmanager
+def _collector_paused():
+    """Python's cyclic garbage collector off for the block (or the decorated call, here
+    :func:`compile_problem`), then back as it was.  A compilation allocates hundreds of
+    thousands of atoms and tuples, none of them in a reference cycle; each allocation burst
+    set off full collections that traversed every object alive -- the solver's values, its
+    results, the last compilation's facts -- 37% of the kitchen's compilation time (Stow: 5.7
+    s -> 3.3 s).  Garbage without cycles is freed at once as ever; what has cycles waits for
+    the next collection after the block."""
+    if not gc.isenabled():
+        yield
+        return
+    gc.disable()
+    try:
+        yield
+    finally:
+        gc.enable()
+
+
+@_collector_paused()
 def compile_problem(
     domain: S.Domain,
     streams: S.StreamFile | None,
@@ -114,64 +134,6 @@ def compile_problem(
     leaves: bool | None = None,
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
-    with _collector_paused():
-        return _compile_problem(
-            domain,
-            streams,
-            problem,
-            caps=caps,
-            level=level,
-            evaluated=evaluated,
-            disabled=disabled,
-            exhausted=exhausted,
-            function_values=function_values,
-            real_function_values=real_function_values,
-            plan_tail=plan_tail,
-            is_constant=is_constant,
-            scale=scale,
-            unit_cost=unit_cost,
-            share=share,
-            leaves=leaves,
-        )
-
-
-@contextlib.contextmanager
-def _collector_paused():
-    """Python's cyclic garbage collector off for the block.  A compilation allocates hundreds of
-    thousands of atoms and tuples, none of them in a reference cycle; each allocation burst
-    set off full collections that traversed every object alive -- the solver's values, its
-    results, the last compilation's facts -- 37% of the kitchen's compilation time (Stow: 5.7
-    s -> 3.3 s).  Garbage without cycles is freed at once as ever; what has cycles waits for
-    the next collection after the block."""
-    if not gc.isenabled():
-        yield
-        return
-    gc.disable()
-    try:
-        yield
-    finally:
-        gc.enable()
-
-
-def _compile_problem(
-    domain: S.Domain,
-    streams: S.StreamFile | None,
-    problem: S.Problem,
-    *,
-    caps,
-    level: int,
-    evaluated: Iterable[Result],
-    disabled: Iterable[Instance],
-    exhausted: Iterable[Instance],
-    function_values: Mapping[str, float] | None,
-    real_function_values: Mapping[S.FuncTerm, float] | None,
-    plan_tail: Sequence[tuple[str, Sequence[str]]] | None,
-    is_constant: Callable[[str], bool] | None,
-    scale: int | None,
-    unit_cost: bool,
-    share: bool,
-    leaves: bool | None,
-) -> Compiled:
     passes: list[PassResult] = [objects_as_constants(domain, problem)]
     inst = None
     if streams is not None:
