@@ -28,6 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from ssr_compile.errors import SSRError  # noqa: E402
 from ssr_compile.focused import RESAMPLE, solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
 
@@ -166,11 +167,20 @@ def main() -> None:
     print("-" * len(head))
     for n in args.sizes:
         runs: dict[str, list] = {a: [] for a in args.algorithm}
+        failed: dict[str, str] = {}
         for _ in range(args.runs):
             for algorithm in args.algorithm:
-                runs[algorithm].append(run_once(n, args, algorithm))
+                if algorithm in failed:
+                    continue
+                try:
+                    runs[algorithm].append(run_once(n, args, algorithm))
+                except SSRError as e:  # a size past a limit (the instance cap) is a row
+                    failed[algorithm] = str(e)
         for algorithm, rows in runs.items():
-            print_row(n, algorithm, rows)
+            if algorithm in failed:
+                print(f"{n:6d} {algorithm:9s} error: {failed[algorithm]}", flush=True)
+            else:
+                print_row(n, algorithm, rows)
 
 
 def print_row(n: int, algorithm: str, rows: list) -> None:
