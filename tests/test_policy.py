@@ -396,3 +396,29 @@ def test_a_constrained_attempt_takes_a_plan_that_holds_with_its_values_drawn(mon
     unconstrained = [a for c, a in calls if not c]
     assert constrained and all(a is True for a in constrained)
     assert unconstrained and all(a is None for a in unconstrained)
+
+
+def test_an_unconstrained_attempt_is_capped_by_the_planning_budget_left(monkeypatch):
+    # Each unconstrained attempt may plan at most what the episode's budget has left, however
+    # long its own limit (300 s here): the budget is the paper's total planning time.
+    import ssr_compile.policy as policy_module
+
+    real_solve = policy_module.solve
+    limits: list[tuple[float, float]] = []  # (the attempt's limit, the budget left before it)
+    planned = [0.0]
+
+    def spy(*args, **kw):
+        options, state = args[4], args[5]
+        if state is None or not state.tail:
+            limits.append((options.time_limit, 3.0 - planned[0]))
+        sol = real_solve(*args, **kw)
+        planned[0] += sol.stats.total_time
+        return sol
+
+    monkeypatch.setattr(policy_module, "solve", spy)
+    episode = progress.make_episode(None, 0)
+    run_policy(episode, PolicySettings(variant="neither", budget=3.0, max_cycles=25))
+    assert len(limits) >= 2
+    assert limits[0][0] == pytest.approx(3.0)  # not unconstrained_time's 300 s
+    for limit, left in limits:
+        assert limit == pytest.approx(left, abs=1e-6)
