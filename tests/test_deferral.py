@@ -136,3 +136,15 @@ def test_with_deferral_off_nothing_is_deferred():
 def test_an_empty_plan_defers_nothing():
     now, later = reschedule(plan=[], never=())
     assert now == NEEDED and later == []
+
+
+def test_a_fact_the_first_precondition_rests_on_is_evaluated_now():
+    # A test has no output to appear among the arguments: the certified fact it makes, which
+    # the first action's precondition needs, is what makes it needed now.
+    first = result("test-cfree", ["q0", "o"], [], [atom("CFree", "q0", "o")], kind="test")
+    second = result("test-cfree", ["q1", "o"], [], [atom("CFree", "q1", "o")], kind="test")
+    plan = [("move", ("q0", "q1")), ("move", ("q1", "q2"))]
+    preimage = Preimage(per_step=[{atom("CFree", "q0", "o")}, {atom("CFree", "q1", "o")}],
+                        per_step_costs=[set(), set()])  # fmt: skip
+    now, later = reschedule([first, second], preimage, plan, never=())
+    assert now == [first] and later == [second]
