@@ -16,12 +16,12 @@ import argparse
 import statistics
 import time
 
+from planner_overhead import make as get_planner  # NAME or NAME[key=value]
+
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.examples import SHIPPED_PROBLEMS, load_example
 from ssr_compile.parse import parse_file
-from ssr_compile.preimage import PlanInvalid, plan_preimage
-
-from planner_overhead import make as get_planner  # NAME or NAME[key=value]
+from ssr_compile.solver.preimage import PlanInvalid, plan_preimage
 
 PROBLEMS = SHIPPED_PROBLEMS  # (example, problem file, level at which it has a plan)
 PLANNERS = ["fd", "pyperplan", "up:fast-downward", "up:pyperplan"]

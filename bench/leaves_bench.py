@@ -19,7 +19,7 @@ import time
 def first_plan(task: str, seed: int, leaves: bool) -> dict:
     from ssr_compile.streams.kitchen_env import make_episode
 
-    from ssr_compile.focused import solve
+    from ssr_compile.solver import SolveOptions, solve
 
     episode = make_episode(task, seed)
     try:
@@ -29,7 +29,7 @@ def first_plan(task: str, seed: int, leaves: bool) -> dict:
         began = time.perf_counter()
         sol = solve(
             agent.domain, agent.streams, problem, module,
-            planner="fd", time_limit=300, defer=True, leaves=leaves,
+            SolveOptions(planner="fd", time_limit=300, defer=True, leaves=leaves),
         )  # fmt: skip
         took = time.perf_counter() - began
         st = sol.stats

@@ -29,8 +29,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from ssr_compile.errors import SSRError  # noqa: E402
-from ssr_compile.focused import RESAMPLE, solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
+from ssr_compile.solver import RESAMPLE, SolveOptions, solve  # noqa: E402
 
 FOLDER = ROOT / "domains/pddl/tamp2d"
 WIDTH, HEIGHT = 0.5, 0.8
@@ -86,14 +86,16 @@ def run_once(n: int, args, algorithm: str = "focused") -> tuple:
         s,
         p,
         module,
-        planner=args.planner,
-        time_limit=args.time_limit,
-        initial_level=args.level,
-        max_level=args.max_level,
-        redraws=args.redraws,
-        resample=args.resample,
-        accept_drawn=args.accept_drawn or None,
-        algorithm=algorithm,
+        SolveOptions(
+            planner=args.planner,
+            time_limit=args.time_limit,
+            initial_level=args.level,
+            max_level=args.max_level,
+            redraws=args.redraws,
+            resample=args.resample,
+            accept_drawn=args.accept_drawn or None,
+            algorithm=algorithm,
+        ),
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())

@@ -40,8 +40,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from ssr_compile.experiment import parse_seeds  # noqa: E402
-from ssr_compile.focused import solve  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
+from ssr_compile.solver import SolveOptions, solve  # noqa: E402
 from ssr_compile.stream import module_for_problem  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -118,12 +118,14 @@ def run_once(
         s,
         p,
         module,
-        planner=backend,
-        time_limit=time_limit,
-        defer=defer,
-        initial_level=int(config.get("level", 1)),
-        max_level=int(config.get("max_level", 8)),
-        **options,
+        SolveOptions(
+            planner=backend,
+            time_limit=time_limit,
+            defer=defer,
+            initial_level=int(config.get("level", 1)),
+            max_level=int(config.get("max_level", 8)),
+            **options,
+        ),
     )
     elapsed = time.perf_counter() - start
     calls = sum(st.calls for st in sol.stats.streams.values())

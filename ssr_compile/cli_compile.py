@@ -316,7 +316,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     from .errors import TimeLimitReached
     from .planners import get_planner
     from .planners.base import TIMEOUT, UNSOLVABLE, PlanResult
-    from .preimage import plan_preimage, stream_plan
+    from .solver.preimage import plan_preimage, stream_plan
 
     warnings: list[str] = []
     start = time.monotonic()

@@ -140,7 +140,7 @@ DEFAULTS = {
     "max_cost": math.inf,
     "defer": False,
     "algorithm": "focused",
-    "resample": 2,  # focused.RESAMPLE (not imported here: the solver loads in ~0.4 s)
+    "resample": 2,  # solver.RESAMPLE (not imported here: the solver loads in ~0.4 s)
     "seed": 0,
 }
 _FLAGS = {
@@ -165,7 +165,7 @@ def _check_bool(text: str) -> bool:
 
 
 def _check_algorithm(text: str) -> str:
-    from .focused import ALGORITHMS
+    from .solver import ALGORITHMS
 
     if text not in ALGORITHMS:
         raise argparse.ArgumentTypeError(
@@ -309,7 +309,7 @@ def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], dict]:
 
 def run(args: argparse.Namespace) -> int:
     from .cli_compile import load_inputs
-    from .focused import print_solution, solve
+    from .solver import SolveOptions, print_solution, solve
     from .stream import module_for_problem
 
     if args.full and not args.json:
@@ -352,11 +352,7 @@ def run(args: argparse.Namespace) -> int:
                 left = time_limit - (time.monotonic() - start)
                 if left <= 0:
                     raise TimeLimitReached(time_limit)
-                solution = solve(
-                    domain,
-                    streams,
-                    problem,
-                    module,
+                options = SolveOptions(
                     planner=planner,
                     time_limit=left,
                     max_cost=max_cost,
@@ -367,6 +363,7 @@ def run(args: argparse.Namespace) -> int:
                     algorithm=algorithm,
                     resample=resample,
                 )
+                solution = solve(domain, streams, problem, module, options)
         except TimeLimitReached as e:
             status = 1
             message = f"time limit of {time_limit:g} s reached" + _where(e)

@@ -406,7 +406,7 @@ def _cpu_time() -> float | None:
         return None
 
 
-_PRELOAD = ["ssr_compile.policy", "ssr_compile.focused", "numpy", "ssr_compile.experiment"]
+_PRELOAD = ["ssr_compile.policy", "ssr_compile.solver", "numpy", "ssr_compile.experiment"]
 _WARM = "SSR_EXPERIMENT_WARM"  # example folders whose files and modules the fork server loads
 
 

@@ -12,10 +12,11 @@ Each cycle:
 4. no plan: failure; an empty plan: the goal belief is reached;
 5. otherwise EXECUTE the first action in the :class:`Environment`, receive its observation,
    UPDATE the belief, keep ``ConstantFacts(f)`` (the certificate's static facts over
-   constants only) and the unexecuted tail -- the solver's :class:`~ssr_compile.focused.ReplanState`,
-   which the next constrained attempt hands it -- and repeat.
+   constants only) and the unexecuted tail -- the solver's
+   :class:`~ssr_compile.solver.ReplanState`, which the next constrained attempt hands it -- and
+   repeat.
 
-PLAN is the Focused solver (:func:`ssr_compile.focused.solve`); with deferral (§VII) it leaves
+PLAN is the Focused solver (:func:`ssr_compile.solver.solve`); with deferral (§VII) it leaves
 the deferrable streams the first action does not need optimistic, and they stay so until a
 later cycle needs them.
 
@@ -23,21 +24,18 @@ The policy never reads the true state: success is judged afterwards by
 :meth:`Environment.goal_holds` on the environment's true state.
 """
 
-# The cycle's closures (attempt, log) are called within their own iteration only.
-# ruff: noqa: B023
-
 from __future__ import annotations
 
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .errors import InstanceCapReached, TimeLimitReached
-from .focused import RESAMPLE, ReplanState, Solution, Statistics, Step, solve, with_kept
 from .limits import overrunning_stream, time_limit
+from .solver import RESAMPLE, ReplanState, Solution, SolveOptions, Statistics, Step, solve
 from .stream import StreamsModule
 
 STREAM_GRACE = 1.0  # seconds a planning attempt may overrun its limit before the alarm
@@ -172,6 +170,20 @@ class PolicySettings:
     @property
     def constraints(self) -> bool:
         return VARIANTS[self.variant][0]
+
+    def solve_options(self, **changes: Any) -> SolveOptions:
+        """The solver's options of a planning attempt of this episode: its planner, cost bound,
+        deferral (the variant's), draws again and levels; ``changes`` (the attempt's time limit,
+        first and last level, ...) replace any of them."""
+        fields: dict[str, Any] = {
+            "planner": self.planner,
+            "max_cost": self.max_cost,
+            "defer": self.defer,
+            "initial_level": self.initial_level,
+            "max_level": self.max_level,
+            "resample": self.resample,
+        }
+        return SolveOptions(**(fields | changes))
 
     @property
     def defer(self) -> bool:
@@ -322,10 +334,6 @@ def _stream_constants(solution: Solution, module: StreamsModule) -> set[str]:
     return out
 
 
-# ``s ∪ f_prev`` is the solver's (it owns the replanning state); the older name:
-_with_kept = with_kept
-
-
 def run_policy(
     episode: Episode,
     settings: PolicySettings | None = None,
@@ -334,212 +342,270 @@ def run_policy(
     progress: Callable[[str], None] | None = None,
 ) -> EpisodeResult:
     """Run Algorithm 1 in ``episode`` until the goal belief, a failure or a limit."""
-    settings = settings or PolicySettings()
-    env, agent = episode.environment, episode.agent
-    start = time.monotonic()
-    planning = 0.0
-    cycles: list[Cycle] = []
-    state = ReplanState()
+    return _Policy(episode, settings or PolicySettings(), on_cycle, progress).run()
 
-    def finish(believed: bool, reason: str) -> EpisodeResult:
+
+@dataclass
+class _CycleState:
+    """One cycle so far: its planning attempts' time (``"c"``: constrained, ``"u"``:
+    unconstrained), stream and planner calls, and how its constrained attempt went."""
+
+    index: int
+    start: float
+    constrained: str = "-"
+    spent: dict[str, float] = field(default_factory=lambda: {"c": 0.0, "u": 0.0})
+    streams_called: int = 0
+    planners_called: int = 0
+
+
+class _Policy:
+    """One run of Algorithm 1 (:func:`run_policy`): what the episode keeps between cycles --
+    the planning time spent, the cycles logged, the replanning state and the level the plan in
+    use was found at."""
+
+    def __init__(
+        self,
+        episode: Episode,
+        settings: PolicySettings,
+        on_cycle: Callable[[Cycle], None] | None,
+        progress: Callable[[str], None] | None,
+    ):
+        self.settings, self.on_cycle, self.progress = settings, on_cycle, progress
+        self.env, self.agent = episode.environment, episode.agent
+        self.start = time.monotonic()
+        self.planning = 0.0
+        self.cycles: list[Cycle] = []
+        self.state = ReplanState()
+        self.last_level = settings.initial_level  # the level the plan in use was found at
+
+    def run(self) -> EpisodeResult:
+        self.agent.update(None, self.env.observe())
+        try:
+            for index in range(1, self.settings.max_cycles + 1):
+                ended = self.cycle(_CycleState(index, time.monotonic()))
+                if ended is not None:
+                    return ended
+        except StreamOverrun as e:
+            self.planning += e.seconds
+            return self.finish(False, str(e))
+        return self.finish(False, f"no goal within {self.settings.max_cycles} cycles")
+
+    def finish(self, believed: bool, reason: str) -> EpisodeResult:
         return EpisodeResult(
-            env.goal_holds(), believed, reason, cycles, planning, time.monotonic() - start
+            self.env.goal_holds(),
+            believed,
+            reason,
+            self.cycles,
+            self.planning,
+            time.monotonic() - self.start,
         )
 
-    agent.update(None, env.observe())
-    last_level = settings.initial_level  # the level the plan in use was found at
-    try:
-        for index in range(1, settings.max_cycles + 1):
-            cycle_start = time.monotonic()
-            remaining = settings.budget - planning
+    def cycle(self, cycle: _CycleState) -> EpisodeResult | None:
+        """DETERMINIZE, PLAN (constrained, then unconstrained), EXECUTE the first action;
+        the episode's result when it ends here."""
+        settings = self.settings
+        if settings.budget - self.planning <= 0:
+            return self.finish(False, f"planning budget of {settings.budget:g} s exhausted")
+        problem, module = self.agent.problem()
+        solution: Solution | None = None
+        comparison: float | None = None
+        if settings.constraints and self.state.tail:
+            solution, comparison = self.constrained_attempt(cycle, problem, module)
+        if solution is None:
+            remaining = settings.budget - self.planning
             if remaining <= 0:
-                return finish(False, f"planning budget of {settings.budget:g} s exhausted")
-            problem, module = agent.problem()
-            constrained = "-"
-            comparison: float | None = None
-            solution: Solution | None = None
-            spent = {"c": 0.0, "u": 0.0}
-            streams_called = planners_called = 0
-
-            def attempt(prob, mod, limit, key, max_level, first_level=None, **kw) -> Solution:
-                nonlocal planning, streams_called, planners_called
-                began = time.monotonic()
-                first = settings.initial_level if first_level is None else first_level
-                try:
-                    # The solver stops itself at ``limit``; the alarm stops a stream that never
-                    # returns (user code) a little later.
-                    with time_limit(limit + STREAM_GRACE):
-                        sol = solve(
-                            agent.domain,
-                            agent.streams,
-                            prob,
-                            mod,
-                            planner=settings.planner,
-                            time_limit=limit,
-                            max_cost=settings.max_cost,
-                            defer=settings.defer,
-                            initial_level=first,
-                            max_level=max_level,
-                            progress=progress,
-                            resample=settings.resample,
-                            **kw,
-                        )
-                except InstanceCapReached as e:
-                    if first == settings.initial_level:
-                        raise
-                    # A constrained attempt started at the last plan's level: passing the cap
-                    # there is no plan of this attempt (the unconstrained one starts low).
-                    stats = Statistics(total_time=time.monotonic() - began)
-                    sol = Solution("unsolvable", None, None, [], stats, message=e.message)
-                except TimeLimitReached as e:
-                    name = overrunning_stream(e)
-                    if name is not None and key != "c":
-                        raise StreamOverrun(name, time.monotonic() - began) from None
-                    # The solver's own work (compiling a large level, the translator) ran past
-                    # the limit, or a stream of a constrained attempt did (a kitchen sampler's
-                    # batch, a second or two, started just before the limit: Swap seed 0
-                    # ended there once): this attempt timed out, the episode goes on.  A stream
-                    # that never returns stops the unconstrained attempt next, and the episode.
-                    stats = Statistics(total_time=time.monotonic() - began)
-                    sol = Solution(
-                        "timeout", None, None, [], stats,
-                        message=f"time limit of {limit:g} s reached",
-                    )  # fmt: skip
-                planning += sol.stats.total_time
-                spent[key] += sol.stats.total_time
-                streams_called += sum(s.calls for s in sol.stats.streams.values())
-                planners_called += sol.stats.planner_calls
-                return sol
-
-            def log(action, sol, **timings) -> None:
-                """Record this cycle (the policy's own time is what is left of it)."""
-                record = _record(
-                    index,
-                    action,
-                    constrained,
-                    spent,
-                    streams_called,
-                    planners_called,
-                    sol,
-                    agent,
-                    cycle_start,
-                )
-                for key, value in timings.items():
-                    setattr(record, key, value)
-                if "execution_time" in timings:
-                    total = time.monotonic() - cycle_start - (timings["comparison_time"] or 0.0)
-                    record.overhead_time = max(
-                        total - record.planning_time - record.execution_time - record.update_time,
-                        0.0,
-                    )
-                cycles.append(record)
-                if on_cycle:
-                    on_cycle(record)
-
-            if settings.constraints and state.tail:
-                limit = min(settings.constrained_time, settings.budget - planning)
-                # The constants of this attempt: those carried over (the kept values among
-                # them) and the problem's own.  The solver adds the kept facts (s ∪ f_prev).
-                own = {o.name for o in problem.objects if agent.is_constant(o.name)}
-                # It starts at the level the last plan was found at: the tail's instances
-                # are no deeper now (more of their inputs are real), and each level below
-                # was a planner call on a problem without the tail (Swap: levels 1-4 of
-                # every constrained attempt, 0.3-0.7 s each, "0 ground actions").
-                # As many levels as from the first (a level rise also retries what failed).
-                first = max(settings.initial_level, min(last_level, settings.max_level))
-                solution = attempt(
-                    problem,
-                    module,
-                    limit,
-                    "c",
-                    settings.max_level + first - settings.initial_level,
-                    first_level=first,
-                    state=replace(state, constants=state.constants | own),
-                    accept_drawn=True,
-                )
-                if solution.solved:
-                    constrained = "held"
-                    if settings.compare_unconstrained:
-                        other = solve(
-                            agent.domain,
-                            agent.streams,
-                            problem,
-                            module,
-                            planner=settings.planner,
-                            time_limit=settings.unconstrained_time,
-                            max_cost=settings.max_cost,
-                            defer=settings.defer,
-                            initial_level=settings.initial_level,
-                            max_level=settings.max_level,
-                            resample=settings.resample,
-                        )
-                        comparison = other.stats.total_time if other.solved else None
-                else:
-                    constrained = "timeout" if solution.status == "timeout" else "fell back"
-                    solution = None
-            if solution is None:
-                remaining = settings.budget - planning
-                if remaining <= 0:
-                    log(None, None)
-                    return finish(False, f"planning budget of {settings.budget:g} s exhausted")
-                solution = attempt(
-                    problem,
-                    module,
-                    min(settings.unconstrained_time, remaining),
-                    "u",
-                    settings.unconstrained_max_level,
-                )
-            if not solution.solved:
-                log(None, solution)
-                why = (
-                    "planning budget exhausted" if planning >= settings.budget else solution.message
-                )
-                return finish(False, f"no plan: {why}")
-            plan = solution.plan or []
-            if solution.stats.levels:
-                last_level = solution.stats.levels[-1]
-            if not plan:
-                log(None, solution)
-                return finish(True, "goal belief reached")
-            # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
-            constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
-            constants |= _stream_constants(solution, module)
-            constants |= {n for n in state.kept_values}
-            kept_facts, kept_values = constant_facts(
-                solution,
+                self.log(cycle, None, None)
+                return self.finish(False, f"planning budget of {settings.budget:g} s exhausted")
+            solution = self.attempt(
+                cycle,
                 problem,
-                lambda n: n in constants,
+                module,
+                min(settings.unconstrained_time, remaining),
+                "u",
+                settings.unconstrained_max_level,
             )
-            tail = [(s.name, tuple(s.args)) for s in plan[1:]]
-            step = plan[0]
-            before_exec = time.monotonic()
-            observation = env.execute(step)
-            after_exec = time.monotonic()
-            agent.update(step, observation)
-            after_update = time.monotonic()
-            state = ReplanState(
-                tail or None,
-                frozenset(
-                    n
-                    for n in constants
-                    if n in kept_values or n in {o.name for o in problem.objects}
-                ),
-                kept_facts,
-                kept_values,
+        if not solution.solved:
+            self.log(cycle, None, solution)
+            why = (
+                "planning budget exhausted"
+                if self.planning >= settings.budget
+                else solution.message
             )
-            log(
-                str(step),
-                solution,
-                execution_time=after_exec - before_exec,
-                update_time=after_update - after_exec,
-                comparison_time=comparison,
-                observation=None if observation is None else str(observation),
-                failed=getattr(observation, "ok", True) is False,
+            return self.finish(False, f"no plan: {why}")
+        if solution.stats.levels:
+            self.last_level = solution.stats.levels[-1]
+        if not solution.plan:
+            self.log(cycle, None, solution)
+            return self.finish(True, "goal belief reached")
+        self.act(cycle, problem, module, solution, comparison)
+        return None
+
+    def constrained_attempt(
+        self, cycle: _CycleState, problem: S.Problem, module: StreamsModule
+    ) -> tuple[Solution | None, float | None]:
+        """PLAN with the last plan's tail enforced: its solution (``None``: fall back) and, when
+        measured (``compare_unconstrained``), the time an unconstrained solve took."""
+        settings, state = self.settings, self.state
+        limit = min(settings.constrained_time, settings.budget - self.planning)
+        # The constants of this attempt: those carried over (the kept values among
+        # them) and the problem's own.  The solver adds the kept facts (s ∪ f_prev).
+        own = {o.name for o in problem.objects if self.agent.is_constant(o.name)}
+        # It starts at the level the last plan was found at: the tail's instances
+        # are no deeper now (more of their inputs are real), and each level below
+        # was a planner call on a problem without the tail (Swap: levels 1-4 of
+        # every constrained attempt, 0.3-0.7 s each, "0 ground actions").
+        # As many levels as from the first (a level rise also retries what failed).
+        first = max(settings.initial_level, min(self.last_level, settings.max_level))
+        solution = self.attempt(
+            cycle,
+            problem,
+            module,
+            limit,
+            "c",
+            settings.max_level + first - settings.initial_level,
+            first_level=first,
+            state=replace(state, constants=state.constants | own),
+            accept_drawn=True,
+        )
+        if not solution.solved:
+            cycle.constrained = "timeout" if solution.status == "timeout" else "fell back"
+            return None, None
+        cycle.constrained = "held"
+        comparison = None
+        if settings.compare_unconstrained:
+            options = settings.solve_options(time_limit=settings.unconstrained_time)
+            other = solve(self.agent.domain, self.agent.streams, problem, module, options)
+            comparison = other.stats.total_time if other.solved else None
+        return solution, comparison
+
+    def attempt(
+        self,
+        cycle: _CycleState,
+        problem: S.Problem,
+        module: StreamsModule,
+        limit: float,
+        key: str,
+        max_level: int,
+        first_level: int | None = None,
+        state: ReplanState | None = None,
+        accept_drawn: bool | None = None,
+    ) -> Solution:
+        """One planning attempt of at most ``limit`` seconds (``key``: "c" constrained, "u"
+        unconstrained), counted in the episode's planning time and in ``cycle``."""
+        settings = self.settings
+        began = time.monotonic()
+        first = settings.initial_level if first_level is None else first_level
+        options = settings.solve_options(
+            time_limit=limit,
+            initial_level=first,
+            max_level=max_level,
+            progress=self.progress,
+            accept_drawn=accept_drawn,
+        )
+        try:
+            # The solver stops itself at ``limit``; the alarm stops a stream that never
+            # returns (user code) a little later.
+            with time_limit(limit + STREAM_GRACE):
+                sol = solve(self.agent.domain, self.agent.streams, problem, module, options, state)
+        except InstanceCapReached as e:
+            if first == settings.initial_level:
+                raise
+            # A constrained attempt started at the last plan's level: passing the cap
+            # there is no plan of this attempt (the unconstrained one starts low).
+            stats = Statistics(total_time=time.monotonic() - began)
+            sol = Solution("unsolvable", None, None, [], stats, message=e.message)
+        except TimeLimitReached as e:
+            name = overrunning_stream(e)
+            if name is not None and key != "c":
+                raise StreamOverrun(name, time.monotonic() - began) from None
+            # The solver's own work (compiling a large level, the translator) ran past
+            # the limit, or a stream of a constrained attempt did (a kitchen sampler's
+            # batch, a second or two, started just before the limit: Swap seed 0
+            # ended there once): this attempt timed out, the episode goes on.  A stream
+            # that never returns stops the unconstrained attempt next, and the episode.
+            stats = Statistics(total_time=time.monotonic() - began)
+            sol = Solution(
+                "timeout", None, None, [], stats,
+                message=f"time limit of {limit:g} s reached",
+            )  # fmt: skip
+        self.planning += sol.stats.total_time
+        cycle.spent[key] += sol.stats.total_time
+        cycle.streams_called += sum(s.calls for s in sol.stats.streams.values())
+        cycle.planners_called += sol.stats.planner_calls
+        return sol
+
+    def act(
+        self,
+        cycle: _CycleState,
+        problem: S.Problem,
+        module: StreamsModule,
+        solution: Solution,
+        comparison: float | None,
+    ) -> None:
+        """EXECUTE the plan's first action, UPDATE the belief, keep ``ConstantFacts(f)`` and
+        the tail for the next cycle, and log the cycle."""
+        agent, plan = self.agent, solution.plan
+        # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
+        constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
+        constants |= _stream_constants(solution, module)
+        constants |= {n for n in self.state.kept_values}
+        kept_facts, kept_values = constant_facts(
+            solution,
+            problem,
+            lambda n: n in constants,
+        )
+        tail = [(s.name, tuple(s.args)) for s in plan[1:]]
+        step = plan[0]
+        before_exec = time.monotonic()
+        observation = self.env.execute(step)
+        after_exec = time.monotonic()
+        agent.update(step, observation)
+        after_update = time.monotonic()
+        self.state = ReplanState(
+            tail or None,
+            frozenset(
+                n
+                for n in constants
+                if n in kept_values or n in {o.name for o in problem.objects}
+            ),
+            kept_facts,
+            kept_values,
+        )
+        self.log(
+            cycle,
+            str(step),
+            solution,
+            execution_time=after_exec - before_exec,
+            update_time=after_update - after_exec,
+            comparison_time=comparison,
+            observation=None if observation is None else str(observation),
+            failed=getattr(observation, "ok", True) is False,
+        )
+
+    def log(self, cycle: _CycleState, action, sol, **timings) -> None:
+        """Record this cycle (the policy's own time is what is left of it)."""
+        record = _record(
+            cycle.index,
+            action,
+            cycle.constrained,
+            cycle.spent,
+            cycle.streams_called,
+            cycle.planners_called,
+            sol,
+            self.agent,
+            cycle.start,
+        )
+        for key, value in timings.items():
+            setattr(record, key, value)
+        if "execution_time" in timings:
+            total = time.monotonic() - cycle.start - (timings["comparison_time"] or 0.0)
+            record.overhead_time = max(
+                total - record.planning_time - record.execution_time - record.update_time,
+                0.0,
             )
-    except StreamOverrun as e:
-        planning += e.seconds
-        return finish(False, str(e))
-    return finish(False, f"no goal within {settings.max_cycles} cycles")
+        self.cycles.append(record)
+        if self.on_cycle:
+            self.on_cycle(record)
 
 
 def _record(

@@ -49,10 +49,10 @@ from ssr_compile.sim.world import DRAWERS, ExecutionError, World
 from ssr_compile import syntax as S
 from ssr_compile.belief.observation import visibility_mask
 from ssr_compile.belief.particles import ObservationModel, PoseBelief, update
-from ssr_compile.focused import Step
 from ssr_compile.parse import parse_file
 from ssr_compile.policy import Episode
 from ssr_compile.resources import domains_dir
+from ssr_compile.solver import Step
 from ssr_compile.stream import StreamsModule
 
 from .kitchen_module import MODEL, STREAM_INFO, KitchenModule, to_action

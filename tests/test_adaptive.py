@@ -1,4 +1,4 @@
-"""The adaptive algorithm (ssr_compile/adaptive.py): a queue of plan skeletons sampled between
+"""The adaptive algorithm (ssr_compile/solver/adaptive.py): a queue of plan skeletons sampled between
 planner calls.  Its plans pass the examples' own checkers, cost no more than the Focused
 loop's on the shipped examples, are the same run after run, and it keeps to the time limit,
 retries a failed draw within its skeleton (no planner call) and abandons a skeleton whose
@@ -17,8 +17,8 @@ from test_focused import _simulate
 from test_focused import run as run_pp1d
 
 from ssr_compile.errors import UnsupportedError
-from ssr_compile.focused import ReplanState, solve
 from ssr_compile.parse import parse_file
+from ssr_compile.solver import ReplanState, SolveOptions, solve
 from ssr_compile.stream import from_module, load_streams_module
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,7 +38,8 @@ def solve_tamp2d(folder: str, name: str, **options):
     options.setdefault("planner", "fd:opt")  # as example.toml
     options.setdefault("initial_level", 3)
     sol = solve(
-        domain, streams, problem, from_module(T), time_limit=20, algorithm="adaptive", **options
+        domain, streams, problem, from_module(T),
+        SolveOptions(time_limit=20, algorithm="adaptive", **options),
     )
     assert sol.solved, sol.message
     plan = [(step.name, step.args) for step in sol.plan]
@@ -95,10 +96,7 @@ def test_belief_detect(which, cost):
         streams,
         problem,
         bd.make_module(0),
-        planner="fd:opt",
-        initial_level=3,
-        time_limit=20,
-        algorithm="adaptive",
+        SolveOptions(planner="fd:opt", initial_level=3, time_limit=20, algorithm="adaptive"),
     )
     assert sol.solved, sol.message
     names = [s.name for s in sol.plan]
@@ -117,7 +115,8 @@ def test_continuous_tamp_two_blocks_into_the_goal_region():
     problem = parse_file(fixture / "problem.pddl")
     module = load_streams_module(str(fixture / "streams.py"))
     start = time.monotonic()
-    sol = solve(domain, streams, problem, module, planner="fd", time_limit=20, algorithm="adaptive")
+    options = SolveOptions(planner="fd", time_limit=20, algorithm="adaptive")
+    sol = solve(domain, streams, problem, module, options)
     assert sol.solved, sol.message
     assert time.monotonic() - start < 10
     lo, hi = module.module.REGIONS["goal"]

@@ -14,7 +14,7 @@ from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.examples import SHIPPED_PROBLEMS, load_example
 from ssr_compile.parse import parse_file
 from ssr_compile.planners import get_planner
-from ssr_compile.preimage import plan_preimage
+from ssr_compile.solver.preimage import plan_preimage
 
 PROBLEMS = SHIPPED_PROBLEMS
 PLANNERS = ["fd", "pyperplan", "up:fast-downward", "up:pyperplan"]

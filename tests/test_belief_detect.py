@@ -20,8 +20,8 @@ from ssr_compile.compile.instantiate import Instance, Result, instantiate
 from ssr_compile.compile.lower import lower
 from ssr_compile.compile.pipeline import FullCapabilities, compile_problem
 from ssr_compile.parse import parse_file, parse_text
-from ssr_compile.preimage import PlanInvalid, plan_preimage
 from ssr_compile.printer import to_text
+from ssr_compile.solver.preimage import PlanInvalid, plan_preimage
 from ssr_compile.stream import Generator, ValueTable, call_function, call_test
 
 FOLDER = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "belief-detect"
@@ -367,7 +367,7 @@ def test_costs_make_the_trade_off(grounded):
 # ------------------------------------------------------------------ (c) the Focused solver
 
 def solve_example(which: str, planner: str = "fd:opt"):
-    from ssr_compile.focused import solve
+    from ssr_compile.solver import SolveOptions, solve
 
     problem = load(f"problem-{which}.pddl")
     return solve(
@@ -375,9 +375,7 @@ def solve_example(which: str, planner: str = "fd:opt"):
         load("stream.pddl"),
         problem,
         bd.make_module(0),
-        planner=planner,
-        initial_level=3,
-        time_limit=30,
+        SolveOptions(planner=planner, initial_level=3, time_limit=30),
     )
 
 

@@ -259,7 +259,7 @@ def test_quiet_import_keeps_output_working(tmp_path):
 
 def test_resample_is_a_setting_with_the_solvers_default(capsys):
     from ssr_compile.cli_solve import DEFAULTS
-    from ssr_compile.focused import RESAMPLE
+    from ssr_compile.solver import RESAMPLE
 
     assert DEFAULTS["resample"] == RESAMPLE
     # the Focused loop's drawing again (tamp2d's example.toml picks the adaptive algorithm)

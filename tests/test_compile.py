@@ -26,8 +26,8 @@ from ssr_compile.errors import UnsupportedError
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
 from ssr_compile.planners import get_planner
 from ssr_compile.planners.validate import validate_plan
-from ssr_compile.preimage import PlanInvalid, plan_preimage
 from ssr_compile.printer import to_text
+from ssr_compile.solver.preimage import PlanInvalid, plan_preimage
 
 FIX = Path(__file__).parent / "fixtures" / "compile"
 PP = FIX / "pp1d"

@@ -24,7 +24,7 @@ from ssr_compile.compile.rename import Renamed, rename_task
 from ssr_compile.compile.result import PassResult, map_back
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
 from ssr_compile.planners import get_planner
-from ssr_compile.preimage import plan_preimage
+from ssr_compile.solver.preimage import plan_preimage
 
 # Every feature a lowering step removes: a derived predicate, a quantifier, a disjunction,
 # negation, equality with a constant (``?to`` disappears from ``go-hall``), costs, and an

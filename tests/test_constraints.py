@@ -17,7 +17,7 @@ from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.parse import parse_domain, parse_problem
 from ssr_compile.planners import get_planner
 from ssr_compile.planners.validate import validate_plan
-from ssr_compile.preimage import PlanInvalid, plan_preimage
+from ssr_compile.solver.preimage import PlanInvalid, plan_preimage
 
 DOMAIN = """
 (define (domain arm-pick) (:requirements :strips)

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 from conftest import require_corpus
 
-from ssr_compile.focused import solve
 from ssr_compile.parse import parse_file
+from ssr_compile.solver import SolveOptions, solve
 from ssr_compile.stream import load_streams_module
 
 FIXTURE = Path(__file__).parent / "fixtures" / "ctamp"
@@ -27,7 +27,7 @@ def test_two_blocks_into_the_goal_region(planner):
     streams = parse_file(corpus / "stream.pddl")
     problem = parse_file(FIXTURE / "problem.pddl")
     module = load_streams_module(str(FIXTURE / "streams.py"))
-    sol = solve(domain, streams, problem, module, planner=planner, time_limit=120)
+    sol = solve(domain, streams, problem, module, SolveOptions(planner=planner, time_limit=120))
     assert sol.solved, sol.message
     lo, hi = module.module.REGIONS["goal"]
     placed = {}

@@ -18,8 +18,8 @@ from ssr_compile import syntax as S
 from ssr_compile.check import check_domain, check_problem, check_streams
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.parse import parse_domain, parse_file, parse_problem, parse_stream_file
-from ssr_compile.preimage import PlanInvalid, plan_preimage, stream_plan
 from ssr_compile.printer import to_text
+from ssr_compile.solver.preimage import PlanInvalid, plan_preimage, stream_plan
 from ssr_compile.stream import Generator, from_module
 
 ROOT = Path(__file__).resolve().parents[1] / "domains" / "pddl"
@@ -340,10 +340,11 @@ def test_check_plan_placing_b0_into_the_occupied_goal_region_fails():
 
 
 def _solve(folder: Path, name: str, time_limit: float = 10, **options):
-    focused = pytest.importorskip("ssr_compile.focused")
+    solver = pytest.importorskip("ssr_compile.solver")
     domain, streams, problem = load(folder, name)
-    solution = focused.solve(
-        domain, streams, problem, from_module(T), time_limit=time_limit, **options
+    solution = solver.solve(
+        domain, streams, problem, from_module(T),
+        solver.SolveOptions(time_limit=time_limit, **options),
     )
     assert solution.solved, solution.message
     plan = [(step.name, step.args) for step in solution.plan]
@@ -403,7 +404,7 @@ def test_the_example_settings_solve_the_blocked_problem_with_the_adaptive_algori
     import json
 
     from ssr_compile.cli import main
-    from ssr_compile.focused import solve
+    from ssr_compile.solver import SolveOptions, solve
 
     costs = {}
     for extra in ([], ["--algorithm", "focused"]):
@@ -418,8 +419,8 @@ def test_the_example_settings_solve_the_blocked_problem_with_the_adaptive_algori
     domain = parse_file(TAMP2D / "domain.pddl")
     problem = parse_file(TAMP2D / "problem-blocked.pddl")
     streams = parse_file(TAMP2D / "stream.pddl")
-    sol = solve(domain, streams, problem, T.make_module(0), planner="fd:opt", initial_level=3,
-                algorithm="adaptive")  # fmt: skip
+    sol = solve(domain, streams, problem, T.make_module(0),
+                SolveOptions(planner="fd:opt", initial_level=3, algorithm="adaptive"))  # fmt: skip
     assert sol.solved
     steps = [(s.name, s.values) for s in sol.plan]
     assert T.check_plan(domain, problem, None, steps) == pytest.approx(29.503, abs=1e-3)

@@ -15,8 +15,8 @@ import pytest
 
 from ssr_compile import syntax as S
 from ssr_compile.errors import StreamError
-from ssr_compile.focused import solve
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
+from ssr_compile.solver import SolveOptions, solve
 from ssr_compile.stream import load_streams_module
 
 PP = Path(__file__).parent / "fixtures" / "compile" / "pp1d"
@@ -34,12 +34,12 @@ def fresh_module():
     return load_streams_module(str(PP / "streams.py"))
 
 
-def run(problem="problem-blocked.pddl", module=None, **kw):
+def run(problem="problem-blocked.pddl", module=None, state=None, **kw):
     d, s, p = task(problem)
     module = module or fresh_module()
     kw.setdefault("initial_level", 3)
     kw.setdefault("time_limit", 30)
-    return module, solve(d, s, p, module, **kw)
+    return module, solve(d, s, p, module, SolveOptions(**kw), state)
 
 
 def _values_with_b(module, problem):
@@ -264,7 +264,7 @@ def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_d
     s = parse_stream_file((folder / "stream.pddl").read_text())
     p = parse_problem((folder / "problem.pddl").read_text())
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
-    sol = solve(d, s, p, module, progress=(said := []).append, accept_drawn=True)
+    sol = solve(d, s, p, module, SolveOptions(progress=(said := []).append, accept_drawn=True))
     assert sol.status == "solved", sol.message
     assert said[-1].strip() == "the plan holds with the values drawn"
     assert sol.stats.planner_calls == sol.stats.iterations
@@ -284,14 +284,14 @@ def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_d
         s,
         p,
         module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0),
-        accept_drawn=True,
+        SolveOptions(accept_drawn=True),
     )
     assert [str(x) for x in again.plan] == [str(x) for x in sol.plan] and again.cost == sol.cost
     # by default only a cost-optimal planner's plan is taken as drawn at once (fd's is not): it
     # is kept, the solver plans again, and takes it when the next plan is no cheaper
     said.clear()
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
-    default = solve(d, s, p, module, progress=said.append)
+    default = solve(d, s, p, module, SolveOptions(progress=said.append))
     lines = [line.strip() for line in said]
     kept = lines.index("the plan holds with the values drawn (cost 6; kept, planning again)")
     assert lines[kept + 1].startswith("iteration ")
@@ -327,7 +327,7 @@ def test_out_of_time_after_a_plan_was_drawn_the_solver_returns_that_plan():
 
     said: list[str] = []
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
-    sol = solve(d, s, p, module, planner=ThreeCalls(), progress=said.append)
+    sol = solve(d, s, p, module, SolveOptions(planner=ThreeCalls(), progress=said.append))
     assert sol.status == "solved", sol.message
     # the 4th call, on a level with instances held back, had a slice of the time: cut there,
     # the level rose; the 5th call ran out of time
@@ -341,7 +341,7 @@ def test_out_of_time_after_a_plan_was_drawn_the_solver_returns_that_plan():
     module = module_for_problem("ssr_compile.streams.progress", folder / "problem.pddl", 0)
     planner = ThreeCalls()
     planner.calls = 2
-    assert solve(d, s, p, module, planner=planner).status == "timeout"
+    assert solve(d, s, p, module, SolveOptions(planner=planner)).status == "timeout"
 
 
 def test_rejected_draws_are_redrawn_at_their_level_and_the_plan_simulates():
@@ -409,7 +409,8 @@ def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_pa
     goal = "(:goal (exists (?p) (and (contained a ?p goal) (atpose a ?p))))"
     assert goal in text
     impossible = parse_problem(text.replace(goal, "(:goal (and (holding a ga) (holding b gb)))"))
-    sol = solve(d, s, impossible, fresh_module(), initial_level=1, max_level=8, time_limit=30)
+    options = SolveOptions(initial_level=1, max_level=8, time_limit=30)
+    sol = solve(d, s, impossible, fresh_module(), options)
     assert sol.status == "unsolvable" and sol.plan is None
     assert "no higher level adds a stream instance" in sol.message
     assert sol.stats.levels[-1] < 8

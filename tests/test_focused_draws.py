@@ -10,13 +10,12 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from ssr_compile.streams import tamp2d as T
 
-from ssr_compile import focused
-from ssr_compile.focused import solve
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
 from ssr_compile.planners import get_planner
 from ssr_compile.planners.base import PlanResult
-from ssr_compile.streams import tamp2d as T
+from ssr_compile.solver import SolveOptions, focused, loop, solve
 
 ROOT = Path(__file__).parent.parent
 TAMP2D = ROOT / "domains" / "pddl" / "tamp2d"
@@ -47,8 +46,8 @@ def _far_solve(seed: int, blame_inputs: bool = True, **kw):
         module = replace(module, info=info)
     said: list[str] = []
     sol = solve(
-        d, s, parse_problem(FAR), module, planner="fd", time_limit=30, initial_level=1,
-        progress=said.append, **kw,
+        d, s, parse_problem(FAR), module,
+        SolveOptions(planner="fd", time_limit=30, initial_level=1, progress=said.append, **kw),
     )  # fmt: skip
     return sol, [x.strip() for x in said]
 
@@ -127,7 +126,7 @@ def test_a_planner_call_on_a_level_with_instances_held_back_gets_a_slice_of_the_
     planner = _hangs_once(3)
     said: list[str] = []
     start = time.monotonic()
-    sol = solve(d, s, p, module, planner=planner, time_limit=60, progress=said.append)
+    sol = solve(d, s, p, module, SolveOptions(planner=planner, time_limit=60, progress=said.append))
     took = time.monotonic() - start
     assert sol.status == "solved", sol.message
     assert sol.stats.levels[:4] == [1, 2, 2, 3]
@@ -142,7 +141,7 @@ def test_the_last_level_gets_all_the_time_left():
     # At the last level nothing would give the held-back instances back: no slice.
     d, s, p, module = _progress_task()
     planner = _hangs_once(3)
-    sol = solve(d, s, p, module, planner=planner, time_limit=3, max_level=2)
+    sol = solve(d, s, p, module, SolveOptions(planner=planner, time_limit=3, max_level=2))
     assert sol.status == "timeout"
     assert planner.limits[2] > 2.5  # the time left, not a slice of it
     assert sol.stats.levels == [1, 2, 2]
@@ -162,7 +161,8 @@ def test_a_valid_plan_dearer_than_planned_is_the_answer_when_time_runs_out():
     # once the dear plan is kept, every call runs out of time
     stops = _Fd(lambda n, limit: _timeout(limit) if any("but costs" in x for x in said) else None)
     sol = solve(
-        d, s, p, module, planner=stops, initial_level=3, max_level=3, progress=said.append,
+        d, s, p, module,
+        SolveOptions(planner=stops, initial_level=3, max_level=3, progress=said.append),
     )  # fmt: skip
     kept = [x.strip() for x in said if "but costs" in x]
     assert len(kept) == 1, said
@@ -176,16 +176,16 @@ def test_a_compile_that_would_end_past_the_time_limit_is_not_started(monkeypatch
     # Compiling is not interrupted: each compile here takes 1.2 s, and the progress example
     # needs more than two iterations.  After two, too little is left for a third compile
     # within the 3 s limit: the solver stops in time instead of overrunning it.
-    real_compile = focused.compile_problem
+    real_compile = loop.compile_problem
 
     def slow_compile(*args, **kwargs):
         time.sleep(1.2)
         return real_compile(*args, **kwargs)
 
-    monkeypatch.setattr(focused, "compile_problem", slow_compile)
+    monkeypatch.setattr(loop, "compile_problem", slow_compile)
     d, s, p, module = _progress_task()
     start = time.monotonic()
-    sol = solve(d, s, p, module, time_limit=3.0)
+    sol = solve(d, s, p, module, SolveOptions(time_limit=3.0))
     took = time.monotonic() - start
     assert sol.status == "timeout"
     assert "too little left to compile the next problem" in sol.message
@@ -241,8 +241,8 @@ def test_a_draw_tested_against_more_draws_may_be_drawn_again_more_often():
     problem, values = _row_of_blocks(5)
     said: list[str] = []
     sol = solve(
-        d, s, problem, replace(T.make_module(0), values=values), planner="fd", time_limit=60,
-        progress=said.append, resample=2,
+        d, s, problem, replace(T.make_module(0), values=values),
+        SolveOptions(planner="fd", time_limit=60, progress=said.append, resample=2),
     )  # fmt: skip
     assert sol.status == "solved", sol.message
     most = _most_redraws_per_stream_plan([x.strip() for x in said])
@@ -253,8 +253,8 @@ def test_a_draw_tested_against_more_draws_may_be_drawn_again_more_often():
     problem, values = _row_of_blocks(2)
     said = []
     sol = solve(
-        d, s, problem, replace(T.make_module(0), values=values), planner="fd", time_limit=60,
-        progress=said.append, resample=2,
+        d, s, problem, replace(T.make_module(0), values=values),
+        SolveOptions(planner="fd", time_limit=60, progress=said.append, resample=2),
     )  # fmt: skip
     assert sol.status == "solved", sol.message
     assert max(_most_redraws_per_stream_plan([x.strip() for x in said]), default=0) <= 2

@@ -1,6 +1,6 @@
 """The replanning state (Algorithm 1's ``a_prev`` and ``f_prev``, and what the solver already
-evaluated) has one type, :class:`ssr_compile.focused.ReplanState`: ``solve(state=...)`` gives
-what the keywords it replaces give, and the policy uses the solver's type."""
+evaluated) has one type, :class:`ssr_compile.solver.ReplanState`: ``solve(..., state)`` gives
+what the same state given by hand gives, and the policy uses the solver's type."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import inspect
 
 from ssr_compile.streams import progress
 
-from ssr_compile import focused, policy
-from ssr_compile.focused import ReplanState, solve, with_kept
+from ssr_compile import policy, solver
 from ssr_compile.policy import constant_facts
+from ssr_compile.solver import ReplanState, SolveOptions, solve, with_kept
 
 
 def _outcome(solution):
@@ -30,21 +30,19 @@ def _outcome(solution):
 def _first_plan():
     agent = progress.make_episode(None, 0).agent
     problem, module = agent.problem()
-    first = solve(agent.domain, agent.streams, problem, module, defer=True)
+    first = solve(agent.domain, agent.streams, problem, module, SolveOptions(defer=True))
     assert first.solved
     return agent, problem, first
 
 
 def test_the_policy_uses_the_solvers_replanning_state():
-    assert policy.ReplanState is focused.ReplanState
-    assert policy._with_kept is focused.with_kept
-    # the older keywords still work beside the state
-    params = inspect.signature(solve).parameters
-    for name in ("plan_tail", "is_constant", "evaluated", "values", "state"):
-        assert params[name].kind is inspect.Parameter.KEYWORD_ONLY
+    assert policy.ReplanState is solver.ReplanState
+    # a call reads solve(domain, streams, problem, module, options, state)
+    params = list(inspect.signature(solve).parameters)
+    assert params == ["domain", "streams", "problem", "module", "options", "state"]
 
 
-def test_state_gives_what_the_separate_keywords_give():
+def test_state_gives_what_the_kept_facts_added_by_hand_give():
     agent, problem, first = _first_plan()
     grasps = {o for r in first.evaluated if r.instance.stream == "sample-grasp" for o in r.outputs}
     constants = frozenset({o.name for o in problem.objects if agent.is_constant(o.name)} | grasps)
@@ -52,7 +50,7 @@ def test_state_gives_what_the_separate_keywords_give():
     tail = [(s.name, tuple(s.args)) for s in first.plan]
     state = ReplanState(tail, constants, facts, values)
 
-    # the policy's older way: s ∪ f_prev by hand, then the tail and constants as keywords
+    # s ∪ f_prev by hand, then a state with the tail and constants only
     _, module = agent.problem()
     kept_problem, kept_module = with_kept(problem, module, state)
     by_keywords = solve(
@@ -60,12 +58,11 @@ def test_state_gives_what_the_separate_keywords_give():
         agent.streams,
         kept_problem,
         kept_module,
-        defer=True,
-        plan_tail=tail,
-        is_constant=constants.__contains__,
+        SolveOptions(defer=True),
+        ReplanState(tail, constants),
     )
     _, module = agent.problem()
-    by_state = solve(agent.domain, agent.streams, problem, module, defer=True, state=state)
+    by_state = solve(agent.domain, agent.streams, problem, module, SolveOptions(defer=True), state)
     assert by_state.solved and _outcome(by_state) == _outcome(by_keywords)
     assert [s.name for s in by_state.plan] == [name for name, _ in tail]  # the tail's structure
 
@@ -75,7 +72,8 @@ def test_evaluated_results_and_values_travel_in_the_state():
     kept = [r for r in first.evaluated if not r.optimistic]
     _, module = agent.problem()
     by_keywords = solve(
-        agent.domain, agent.streams, problem, module, evaluated=kept, values=first.values
+        agent.domain, agent.streams, problem, module,
+        state=ReplanState(evaluated=kept, values=first.values),
     )
     _, module = agent.problem()
     state = ReplanState(evaluated=kept, values=first.values)

@@ -10,7 +10,7 @@ from ssr_compile.compile.guards import guard_quantifiers
 from ssr_compile.compile.lower import lower
 from ssr_compile.parse import parse_domain, parse_problem
 from ssr_compile.planners import get_planner
-from ssr_compile.preimage import plan_preimage
+from ssr_compile.solver.preimage import plan_preimage
 
 DOMAIN = """
 (define (domain line)

@@ -52,8 +52,8 @@ def test_the_focused_solver_stops_raising_the_level_at_the_cap(monkeypatch):
 
     from ssr_compile.streams import tamp2d
 
-    from ssr_compile.focused import solve
     from ssr_compile.parse import parse_file
+    from ssr_compile.solver import SolveOptions, solve
     from ssr_compile.stream import from_module
 
     folder = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "tamp2d"
@@ -62,9 +62,9 @@ def test_the_focused_solver_stops_raising_the_level_at_the_cap(monkeypatch):
     first = compile_problem(domain, streams, problem, level=1)
     cap = len(first.instantiation.results) + 1  # level 1 fits, a higher level does not
     monkeypatch.setattr(inst_mod, "MAX_INSTANCES", cap)
-    sol = solve(domain, streams, problem, from_module(tamp2d), time_limit=60)
+    sol = solve(domain, streams, problem, from_module(tamp2d), SolveOptions(time_limit=60))
     assert sol.status == "unsolvable", sol.message
     assert "would pass the cap" in sol.message and "up to level 1 " in sol.message
     monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 1)
     with pytest.raises(UnsupportedError, match="more than 1 stream instances at level 1"):
-        solve(domain, streams, problem, from_module(tamp2d), time_limit=60)
+        solve(domain, streams, problem, from_module(tamp2d), SolveOptions(time_limit=60))

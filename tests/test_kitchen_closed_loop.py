@@ -272,7 +272,7 @@ def test_a_missed_pick_spreads_the_belief_so_the_robot_looks_again():
     from ssr_compile.sim.problem import is_localized
 
     from ssr_compile.belief.particles import PoseBelief
-    from ssr_compile.focused import Step
+    from ssr_compile.solver import Step
 
     ep = make_episode("cook", 0)
     try:

@@ -116,7 +116,7 @@ def test_a_pick_rests_on_the_arm_clear_of_every_other_object(files):
     # (not (armblocked ...)) in pick: the plan's preimage needs an afree test of the pick's
     # arm configuration against each other object at its belief (so the stream plan checks
     # them), and none against the object picked
-    from ssr_compile.preimage import plan_preimage
+    from ssr_compile.solver.preimage import plan_preimage
 
     plan, compiled = optimistic_plan(files, "cook", 5, with_problem=True)
     pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
@@ -136,7 +136,7 @@ def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheap
     # no less, so the kept plan is the solution, with accept_drawn or without.
     from ssr_compile.streams.kitchen_module import make_module
 
-    from ssr_compile.focused import solve
+    from ssr_compile.solver import SolveOptions, solve
 
     domain, streams = files
     runs = {}
@@ -147,8 +147,9 @@ def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheap
             module = make_module(task, np.random.default_rng(0), values)
             said: list[str] = []
             runs[accept] = solve(
-                domain, streams, problem, module, planner="fd", time_limit=120, defer=True,
-                accept_drawn=accept, progress=said.append,
+                domain, streams, problem, module,
+                SolveOptions(planner="fd", time_limit=120, defer=True, accept_drawn=accept,
+                             progress=said.append),
             ), said  # fmt: skip
         finally:
             task.close()
@@ -173,14 +174,15 @@ def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheap
 def test_focused_solves_inspect_and_the_first_action_runs(files):
     from ssr_compile.streams.kitchen_module import make_module, to_action
 
-    from ssr_compile.focused import solve
+    from ssr_compile.solver import SolveOptions, solve
 
     domain, streams = files
     task = make_task("inspect", 0)
     try:
         problem, values = task_problem(task)
         module = make_module(task, np.random.default_rng(0), values)
-        sol = solve(domain, streams, problem, module, planner="fd", time_limit=60, defer=True)
+        options = SolveOptions(planner="fd", time_limit=60, defer=True)
+        sol = solve(domain, streams, problem, module, options)
         assert sol.solved, sol.message
         assert skeleton([(s.name, s.args) for s in sol.plan]) == [
             ("pull", "bottom_drawer"), ("detect", "block"), ("push", "bottom_drawer")
@@ -309,10 +311,10 @@ def test_holding_an_object_where_carry_is_refused_the_arm_moves_to_a_placement_f
     # left.  plan-arm-motion-from goes from where the arm is to a placement's approach.
     from dataclasses import replace
 
-    from ssr_compile.compile.instantiate import Instance
     from ssr_compile.sim.robot import ARM_CARRY
 
     from ssr_compile import syntax as S
+    from ssr_compile.compile.instantiate import Instance
 
     domain, streams = files
     task = make_task("cook", 0)

@@ -14,7 +14,7 @@ from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.errors import SSRError
 from ssr_compile.parse import parse_file, parse_text
 from ssr_compile.planners import get_planner
-from ssr_compile.preimage import plan_preimage
+from ssr_compile.solver.preimage import plan_preimage
 
 PP = Path(__file__).parent / "fixtures" / "compile" / "pp1d"
 KITCHEN = Path(__file__).resolve().parents[1] / "domains" / "pddl" / "kitchen"

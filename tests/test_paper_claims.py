@@ -10,9 +10,9 @@ from collections import Counter
 
 import pytest
 
-from ssr_compile.focused import solve
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
-from ssr_compile.preimage import PlanInvalid, plan_preimage
+from ssr_compile.solver import SolveOptions, solve
+from ssr_compile.solver.preimage import PlanInvalid, plan_preimage
 from ssr_compile.stream import StreamInfo, StreamsModule
 
 # ---------------------------------------------------------------- a tiny task family
@@ -81,10 +81,7 @@ def test_a_deferrable_test_the_first_step_needs_is_evaluated_now(answer):
         _streams(TEST_OK),
         _problem("(done a)"),
         module,
-        defer=True,
-        initial_level=2,
-        max_level=2,
-        time_limit=20,
+        SolveOptions(defer=True, initial_level=2, max_level=2, time_limit=20),
     )
     assert calls["check"] == 1
     assert sol.solved is answer
@@ -105,10 +102,7 @@ def test_a_deferrable_test_needed_only_later_is_deferred():
             _streams(TEST_OK),
             _problem("(placed b s1)"),
             module,
-            defer=defer,
-            initial_level=2,
-            max_level=2,
-            time_limit=20,
+            SolveOptions(defer=defer, initial_level=2, max_level=2, time_limit=20),
         )
         assert sol.solved
         assert [s.name for s in sol.plan] == ["finish", "put"]
@@ -154,9 +148,7 @@ def test_producers_of_what_the_first_action_needs_are_evaluated_even_if_deferrab
         _streams(GEN_STREAMS),
         problem,
         module,
-        defer=True,
-        initial_level=2,
-        time_limit=20,
+        SolveOptions(defer=True, initial_level=2, time_limit=20),
     )
     assert sol.solved
     first = sol.plan[0]
@@ -190,7 +182,8 @@ def test_a_stream_plan_includes_the_producers_of_domain_facts():
             {"test-a": lambda x, a=a_answer: a, "test-b": lambda x: True},
             {"test-a": {"kind": "test"}, "test-b": {"kind": "test"}},
         )
-        sol = solve(domain, streams, problem, module, initial_level=2, max_level=3, time_limit=20)
+        options = SolveOptions(initial_level=2, max_level=3, time_limit=20)
+        sol = solve(domain, streams, problem, module, options)
         assert calls["test-a"] == 1
         assert sol.solved is a_answer
 
@@ -212,9 +205,7 @@ def test_an_alternative_producer_of_the_same_fact_is_tried():
         streams,
         _problem("(done a)"),
         module,
-        initial_level=2,
-        max_level=3,
-        time_limit=20,
+        SolveOptions(initial_level=2, max_level=3, time_limit=20),
     )
     assert sol.solved
     assert calls["check-two"] == 1
@@ -269,9 +260,7 @@ def test_a_deferrable_producer_of_an_input_the_first_step_needs_is_evaluated():
         _streams(LOOK_STREAMS),
         problem,
         module,
-        defer=True,
-        initial_level=2,
-        time_limit=20,
+        SolveOptions(defer=True, initial_level=2, time_limit=20),
     )
     assert sol.solved and not sol.plan[0].deferred
     assert calls["ik"] == 1

@@ -18,7 +18,6 @@ from ssr_compile.policy import (
     Episode,
     PolicySettings,
     ReplanState,
-    _with_kept,
     constant_facts,
     run_policy,
 )
@@ -139,14 +138,15 @@ def test_settings_refuse_unknown_variants_and_bad_limits():
 
 
 def test_constant_facts_keep_only_static_facts_over_constants_and_their_values():
-    from ssr_compile.focused import solve
+    from ssr_compile.solver import SolveOptions, solve, with_kept
 
     episode = progress.make_episode(None, 0)
     agent = episode.agent
     problem, module = agent.problem()
     # without draws again at once, the solver samples a grasp on the way that the plan does
     # not use (the case at hand)
-    solution = solve(agent.domain, agent.streams, problem, module, defer=True, resample=0)
+    options = SolveOptions(defer=True, resample=0)
+    solution = solve(agent.domain, agent.streams, problem, module, options)
     assert solution.solved
     grasps = {
         o for r in solution.evaluated if r.instance.stream == "sample-grasp" for o in r.outputs
@@ -165,7 +165,7 @@ def test_constant_facts_keep_only_static_facts_over_constants_and_their_values()
     assert all(v[0] == "d" and v[1] in progress.GRASPS for v in values.values())
     # s ∪ f_prev: the kept facts and their objects join the next problem
     state = ReplanState([("pick", ("d",))], frozenset(constants), facts, values)
-    p2, m2 = _with_kept(problem, module, state)
+    p2, m2 = with_kept(problem, module, state)
     assert set(facts) <= set(p2.init)
     assert set(values) <= {o.name for o in p2.objects}
     assert all(m2.values[k] == v for k, v in values.items())
@@ -335,7 +335,7 @@ def test_the_solvers_own_overrun_times_the_attempt_out_not_the_episode(monkeypat
     real_solve = policy_module.solve
 
     def slow_when_constrained(*args, **kw):
-        state = kw.get("state")
+        state = args[5]
         if state is not None and state.tail:
             while True:  # the solver's own work, not a stream's
                 pass
@@ -384,8 +384,8 @@ def test_a_constrained_attempt_takes_a_plan_that_holds_with_its_values_drawn(mon
     calls: list[tuple[bool, object]] = []
 
     def spy(*args, **kw):
-        state = kw.get("state")
-        calls.append((state is not None and bool(state.tail), kw.get("accept_drawn")))
+        options, state = args[4], args[5]
+        calls.append((state is not None and bool(state.tail), options.accept_drawn))
         return real_solve(*args, **kw)
 
     monkeypatch.setattr(policy_module, "solve", spy)
@@ -396,3 +396,29 @@ def test_a_constrained_attempt_takes_a_plan_that_holds_with_its_values_drawn(mon
     unconstrained = [a for c, a in calls if not c]
     assert constrained and all(a is True for a in constrained)
     assert unconstrained and all(a is None for a in unconstrained)
+
+
+def test_an_unconstrained_attempt_is_capped_by_the_planning_budget_left(monkeypatch):
+    # Each unconstrained attempt may plan at most what the episode's budget has left, however
+    # long its own limit (300 s here): the budget is the paper's total planning time.
+    import ssr_compile.policy as policy_module
+
+    real_solve = policy_module.solve
+    limits: list[tuple[float, float]] = []  # (the attempt's limit, the budget left before it)
+    planned = [0.0]
+
+    def spy(*args, **kw):
+        options, state = args[4], args[5]
+        if state is None or not state.tail:
+            limits.append((options.time_limit, 3.0 - planned[0]))
+        sol = real_solve(*args, **kw)
+        planned[0] += sol.stats.total_time
+        return sol
+
+    monkeypatch.setattr(policy_module, "solve", spy)
+    episode = progress.make_episode(None, 0)
+    run_policy(episode, PolicySettings(variant="neither", budget=3.0, max_cycles=25))
+    assert len(limits) >= 2
+    assert limits[0][0] == pytest.approx(3.0)  # not unconstrained_time's 300 s
+    for limit, left in limits:
+        assert limit == pytest.approx(left, abs=1e-6)

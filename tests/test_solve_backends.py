@@ -11,12 +11,12 @@ from __future__ import annotations
 import json
 
 import pytest
-
 import ssr_compile.streams.tamp2d as T
+
 from ssr_compile.cli import main
 from ssr_compile.examples import load_example
-from ssr_compile.focused import solve
 from ssr_compile.parse import parse_file
+from ssr_compile.solver import SolveOptions, solve
 
 BACKENDS = ["pyperplan", "up:pyperplan", "up:fast-downward"]
 
@@ -27,8 +27,8 @@ def test_tamp2d_with_every_backend(backend, pfile):
     ex = load_example("tamp2d")
     problem = parse_file(ex.folder / pfile)
     sol = solve(
-        ex.domain, ex.streams, problem, T.make_module(0), planner=backend, initial_level=3,
-        time_limit=60,
+        ex.domain, ex.streams, problem, T.make_module(0),
+        SolveOptions(planner=backend, initial_level=3, time_limit=60),
     )
     assert sol.solved, sol.message
     steps = [(s.name, s.values) for s in sol.plan]
@@ -47,8 +47,8 @@ def test_belief_detect_with_every_backend(backend):
     ex = load_example("belief-detect")
     problem = parse_file(ex.folder / "problem-occluded.pddl")
     sol = solve(
-        ex.domain, ex.streams, problem, bd.make_module(0), planner=backend, initial_level=3,
-        time_limit=60,
+        ex.domain, ex.streams, problem, bd.make_module(0),
+        SolveOptions(planner=backend, initial_level=3, time_limit=60),
     )
     assert sol.solved, sol.message
     names = [s.name for s in sol.plan]

@@ -78,8 +78,8 @@ class _CrashingPlanner:
 def test_a_planner_error_is_a_planner_failure():
     import pytest
 
-    from ssr_compile.focused import solve
     from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
+    from ssr_compile.solver import SolveOptions, solve
     from ssr_compile.stream import load_streams_module
 
     domain = parse_domain(Path(D).read_text())
@@ -87,7 +87,8 @@ def test_a_planner_error_is_a_planner_failure():
     problem = parse_problem(Path(P).read_text())
     module = load_streams_module(str(PP / "streams.py"))
     with pytest.raises(PlannerFailure) as info:
-        solve(domain, streams, problem, module, planner=_CrashingPlanner(), time_limit=30)
+        options = SolveOptions(planner=_CrashingPlanner(), time_limit=30)
+        solve(domain, streams, problem, module, options)
     assert info.value.exit_code == 3 and info.value.detail == "core dumped"
     assert "planner crashy failed: segfault" in str(info.value)
 

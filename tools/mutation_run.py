@@ -62,7 +62,7 @@ DEFAULT_FILES = [
     "ssr_compile/compile/derived.py",
     "ssr_compile/compile/instantiate.py",
     "ssr_compile/compile/constraints.py",
-    "ssr_compile/focused.py",
+    "ssr_compile/solver/focused.py",
     "ssr_compile/belief/particles.py",
     "ssr_compile/belief/observation.py",
     "ssr_compile/belief/visibility.py",

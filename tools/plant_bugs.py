@@ -65,22 +65,22 @@ MUTANTS = {
         "float(d2.min()) > reinvig_mahalanobis",
     ),
     "deferral: producers of must-evaluate not added": (
-        "ssr_compile/focused.py",
+        "ssr_compile/solver/deferral.py",
         "    stack = list(must)\n",
         "    stack = []\n",
     ),
     "deferral: certified-fact check dropped": (
-        "ssr_compile/focused.py",
+        "ssr_compile/solver/deferral.py",
         "            or any(f in first_facts for f in r.certified)\n",
         "",
     ),
     "preimage: add and delete order swapped": (
-        "ssr_compile/preimage.py",
+        "ssr_compile/solver/preimage.py",
         "        state = (state - dels) | adds\n",
         "        state = (state | adds) - dels\n",
     ),
     "stream_plan: domain-fact producers not traversed": (
-        "ssr_compile/preimage.py",
+        "ssr_compile/solver/preimage.py",
         "        for fact in res.domain:\n            for producer in inst.facts.get(fact, ())[:1]:\n                need(producer)\n        needed.append(res)",
         "        needed.append(res)",
     ),

@@ -1,14 +1,14 @@
 """Adaptive sampling: the Focused loop with a queue of plan skeletons (``algorithm="adaptive"``).
 
-The Focused loop (:mod:`ssr_compile.focused`) evaluates each stream plan once and plans again
-after any failure: a test that rejects one sample costs a planner call, and an instance tried at
-a level waits for the next level, whose optimistic problem is larger.  Here every optimistic
-plan the planner returns becomes a *skeleton*: its action plan, its optimistic cost and its
-ordered stream plan.  A skeleton's partial assignments (*bindings*: the first ``i`` results of
-its stream plan bound to real values) sit in one priority queue; visiting a binding asks the
-``i``-th stream instance, with its inputs bound, for one more value, and each value it gave
-becomes a child binding one result deeper.  A binding whose generator can give more stays in
-the queue, so a sample a later test rejected is drawn again without planning again.  A binding
+The Focused loop (:mod:`ssr_compile.solver.focused`) evaluates each stream plan once and plans
+again after any failure: a test that rejects one sample costs a planner call, and an instance
+tried at a level waits for the next level, whose optimistic problem is larger. Here every
+optimistic plan the planner returns becomes a *skeleton*: its action plan, its optimistic cost
+and its ordered stream plan. A skeleton's partial assignments (*bindings*: the first ``i``
+results of its stream plan bound to real values) sit in one priority queue; visiting a binding
+asks the ``i``-th stream instance, with its inputs bound, for one more value, and each value it
+gave becomes a child binding one result deeper. A binding whose generator can give more stays in
+the queue, so a sample a later test rejected is drawn again without planning again. A binding
 that binds the whole stream plan gives a real plan (checked over the real facts and priced with
 the real costs).
 
@@ -27,7 +27,7 @@ is not below the incumbent's are dropped.
 
 No plan at a level: the queue samples until it finds new values (the planner may then plan with
 them at the same level); when it has nothing new, or after ``stalls_per_level`` such rounds, the
-level rises.  Deferral (paper §VII) and the replanning state (:class:`~.focused.ReplanState`)
+level rises.  Deferral (paper §VII) and the replanning state (:class:`~.options.ReplanState`)
 work as in the Focused loop: the deferred results of a skeleton are left out of its stream plan,
 and once the rest is bound the planner is asked again (its plan then needs only deferred
 results).  Shared optimistic outputs (``share=True``) are refused.
@@ -42,21 +42,14 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from .compile.instantiate import Instance, Result
-from .errors import InstanceCapReached, PlannerFailure, SSRError, UnsupportedError
-from .focused import (
-    SOLVED,
-    Solution,
-    _bound_result,
-    _FocusedLoop,
-    _producers,
-    _real_problem,
-    _split_deferred,
-    _steps,
-    order_stream_plan,
-)
-from .planners.costs import plan_cost
-from .preimage import PlanInvalid, plan_preimage, stream_plan
+from ..compile.instantiate import Instance, Result
+from ..errors import InstanceCapReached, PlannerFailure, SSRError
+from ..planners.costs import plan_cost
+from .deferral import order_stream_plan, reschedule_stream_plan, stream_producers
+from .evaluation import bound_result, real_problem
+from .loop import SolverLoop
+from .preimage import PlanInvalid, plan_preimage
+from .results import SOLVED, Solution, plan_steps
 
 # Stream calls the queue may make per planner call (scaled by the optimistic problem's size
 # relative to the first one), no-plan rounds at one level before it rises.
@@ -108,16 +101,12 @@ class _History:
     enumerated: bool = False
 
 
-class AdaptiveLoop(_FocusedLoop):
-    """One call of :func:`~ssr_compile.focused.solve` with ``algorithm="adaptive"``."""
+class AdaptiveLoop(SolverLoop):
+    """One call of :func:`~ssr_compile.solver.solve` with ``algorithm="adaptive"``.  Shared
+    optimistic outputs are refused by :class:`~ssr_compile.solver.options.SolveOptions`."""
 
     def __init__(self, *args, samples_per_plan: int = SAMPLES_PER_PLAN, **kwargs):
         super().__init__(*args, **kwargs)
-        if self.share:
-            raise UnsupportedError(
-                "the adaptive algorithm does not take shared optimistic outputs (share=True); "
-                "use algorithm='focused' for them"
-            )
         self.samples_per_plan = samples_per_plan
         self.skeletons: list[_Skeleton] = []
         self.queue: list[tuple[tuple, _Binding]] = []
@@ -284,23 +273,21 @@ class AdaptiveLoop(_FocusedLoop):
 
     def new_plan(self, compiled, result) -> Solution | None:
         """A plan: the solution when it needs no optimistic result now, else a new skeleton."""
-        plan = compiled.map_plan(result.actions or [])
-        pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
-        inst = compiled.instantiation
-        needed = stream_plan(inst, pre, plan) if inst else []
+        plan, pre, inst, needed = self.stream_plan_of(compiled, result)
         cost = (result.cost or 0.0) / compiled.scale
         certificate = sorted(pre.static_facts, key=str)
         if self.incumbent is not None and cost >= self.incumbent[0] - EPS:
             self.say(f"  the planner's plan costs {cost:g}: the incumbent is the solution")
             return self.finish_incumbent()
         if not needed:
-            return self.better_of(SOLVED, _steps(plan, self.values, set()), cost, certificate)
-        now, later = _split_deferred(needed, pre, plan, inst, self.module, self.defer)
+            return self.better_of(SOLVED, plan_steps(plan, self.values, set()), cost, certificate)
+        deferrable = lambda s: self.module.info_for(s).deferrable  # noqa: E731
+        now, later = reschedule_stream_plan(needed, pre, plan, inst, deferrable, self.defer)
         if not now:
             deferred = {o for r in later for o in r.outputs}
-            steps = _steps(plan, self.values, deferred)
+            steps = plan_steps(plan, self.values, deferred)
             return self.finish(SOLVED, steps, cost, certificate, deferred=later)
-        ordered = order_stream_plan(now, self.module.info_for, _producers(now, inst))
+        ordered = order_stream_plan(now, self.module.info_for, stream_producers(now, inst))
         sk = _Skeleton(len(self.skeletons), list(plan), ordered, later, cost, compiled)
         self.skeletons.append(sk)
         self.say(
@@ -455,7 +442,7 @@ class AdaptiveLoop(_FocusedLoop):
         if any(a in inst.objects and a not in deferred for _, args in bound for a in args):
             return
         real_results = itertools.chain(self.ev.results, (r for _, r in self.hidden))
-        real = _real_problem(
+        real = real_problem(
             self.problem, sk.compiled, real_results, self.ev.real_functions, sk.later, b.mapping
         )
         domain = sk.compiled.source_domain
@@ -469,8 +456,8 @@ class AdaptiveLoop(_FocusedLoop):
             return  # plans must cost less than the bound, as the planner's do
         if self.incumbent is not None and cost >= self.incumbent[0] - EPS:
             return
-        steps = _steps(bound, self.values, deferred)
-        later = [_bound_result(r, b.mapping) for r in sk.later]
+        steps = plan_steps(bound, self.values, deferred)
+        later = [bound_result(r, b.mapping) for r in sk.later]
         self.incumbent = (cost, steps, sorted(pre.static_facts, key=str), later)
         self.after_incumbent = 0
         self.say(

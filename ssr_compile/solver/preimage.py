@@ -17,10 +17,10 @@ from collections import defaultdict
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
-from . import syntax as S
-from .compile.formulas import substitute
-from .compile.instantiate import Instantiation, Result, unify
-from .errors import SSRError
+from .. import syntax as S
+from ..compile.formulas import substitute
+from ..compile.instantiate import Instantiation, Result, unify
+from ..errors import SSRError
 
 Plan = Sequence[tuple[str, Sequence[str]]]
 

@@ -1,0 +1,239 @@
+"""Stream evaluation across the iterations of one solve: the stream instances called, their
+outcomes and real results (:class:`Evaluation`), and the real problem a plan bound to drawn
+values is checked in (:func:`real_problem`)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from typing import Any
+
+from .. import syntax as S
+from ..compile.instantiate import Instance, Result, ground_atom, real_instances
+from ..errors import StreamError, StreamFailure
+from ..stream import Generator, StreamsModule, ValueTable, call_function, call_test
+from .results import Statistics
+
+
+class Evaluation:
+    """Stream state that persists across iterations: generators, results, values."""
+
+    def __init__(
+        self, streams: S.StreamFile, module: StreamsModule, values: ValueTable, stats: Statistics
+    ):
+        self.decl = {s.name: s for s in streams.streams}
+        self.functions = {f.name: f for f in streams.functions}
+        self.module = module
+        self.values = values
+        self.stats = stats
+        self.generators: dict[Instance, Generator] = {}
+        self.results: list[Result] = []
+        self.exhausted: set[Instance] = set()
+        self.tried: set[Instance] = set()  # evaluated at this level
+        self.real_functions: dict[S.FuncTerm, float] = {}
+        # instance (real inputs) -> last outcome: output names, True (test passed) or
+        # False/None (failed)
+        self.outcomes: dict[Instance, Any] = {}
+        self.called = False  # did the last evaluate() call the stream (or reuse an outcome)?
+
+    def evaluate(self, res: Result, binding: dict[str, str]) -> bool:
+        """Evaluate one optimistic result under ``binding`` (optimistic -> real names).
+
+        A stream whose code raises, exits or answers outside its declaration is a
+        :class:`StreamFailure` (the streams module's fault, not the input's)."""
+        try:
+            return self._evaluate(res, binding)
+        except StreamError as e:
+            raise StreamFailure(res.instance.stream, e.message) from e
+
+    def _evaluate(self, res: Result, binding: dict[str, str]) -> bool:
+        inst = bound_instance(res, binding)
+        # Optimistic inputs bound to real values may coincide with an instance evaluated
+        # before: reuse its outcome instead of asking an exhausted generator (or a
+        # deterministic test, or a function) again and calling the plan a failure.
+        self.called = False
+        known = self.outcomes.get(inst)
+        if inst.kind in ("function", "test") and known is not None:
+            self.tried.add(inst)
+            return bool(known)
+        if inst.kind == "stream" and isinstance(known, tuple) and inst in self.exhausted:
+            for opt, real in zip(res.outputs, known):
+                binding[opt] = real
+            return True
+        self.called = True
+        fn = self.module.streams[inst.stream]
+        args = tuple(self.values.value(x) for x in inst.inputs)
+        stats = self.stats.stream(inst.stream)
+        start = time.perf_counter()
+        stats.calls += 1
+        try:
+            if inst.kind == "function":
+                return self._call_function(inst, fn, args)
+            if inst.kind == "test":
+                return self._call_test(res, inst, fn, args)
+            return self._draw(res, inst, fn, args, binding)
+        finally:
+            elapsed = time.perf_counter() - start
+            stats.time += elapsed
+            self.stats.stream_time += elapsed
+
+    def _call_function(self, inst: Instance, fn, args: tuple) -> bool:
+        value = call_function(fn, args, inst.stream)
+        term = S.FuncTerm(inst.stream, tuple(S.Const(x) for x in inst.inputs))
+        self.real_functions[term] = math.inf if value is None else value
+        ok = value is not None
+        self.tried.add(inst)
+        self.outcomes[inst] = ok
+        return ok
+
+    def _call_test(self, res: Result, inst: Instance, fn, args: tuple) -> bool:
+        decl = self.decl[inst.stream]
+        ok = call_test(fn, args, inst.stream)
+        self.exhausted.add(inst)  # deterministic: never retried
+        self.outcomes[inst] = ok
+        if ok:
+            mapping = {p.name: v for p, v in zip(decl.inputs, inst.inputs)}
+            self.results.append(real_result(inst, (), decl, mapping, res.level))
+        return ok
+
+    def _draw(self, res: Result, inst: Instance, fn, args: tuple, binding: dict) -> bool:
+        """One more value of a generator: its outputs named, bound and certified."""
+        decl = self.decl[inst.stream]
+        gen = self.generators.get(inst)
+        if gen is None:
+            kind = self.module.info_for(inst.stream).kind or "generator"
+            gen = self.generators[inst] = Generator(fn, args, kind, inst.stream)
+        self.tried.add(inst)
+        out = gen.next()
+        if gen.exhausted:
+            self.exhausted.add(inst)
+        if out is None:
+            return False
+        if len(out) != len(decl.outputs):
+            raise StreamError(
+                f"stream '{inst.stream}' produced {len(out)} outputs, "
+                f"its declaration has {len(decl.outputs)}"
+            )
+        names = tuple(self.values.name_for(v, p.name) for v, p in zip(out, decl.outputs))
+        mapping = {p.name: v for p, v in zip(decl.inputs, inst.inputs)}
+        mapping.update({p.name: n for p, n in zip(decl.outputs, names)})
+        self.results.append(real_result(inst, names, decl, mapping, res.level))
+        self.outcomes[inst] = names
+        for opt, real in zip(res.outputs, names):
+            binding[opt] = real
+        return True
+
+    def record(self, ok: bool, name: str) -> None:
+        """Count the outcome of the last :meth:`evaluate` if it really called the stream."""
+        if not self.called:
+            return
+        stats = self.stats.stream(name)
+        if ok:
+            stats.successes += 1
+        else:
+            stats.failures += 1
+
+
+class RealFacts:
+    """The real facts (the problem's and the evaluated results'), kept up to date."""
+
+    def __init__(self, problem: S.Problem, ev: Evaluation):
+        self.ev = ev
+        self.facts = {f for f in problem.init if isinstance(f, S.Atom)}
+        self.seen = 0
+
+    def holds(self, fact: S.Atom, local: dict[str, str], binding: dict[str, str]) -> bool:
+        results = self.ev.results
+        for r in results[self.seen :]:
+            self.facts.update(r.certified)
+        self.seen = len(results)
+        ground = S.Atom(
+            fact.pred,
+            tuple(S.Const(local.get(t.name, binding.get(t.name, t.name))) for t in fact.args),
+        )
+        return ground in self.facts
+
+
+def evaluate_eagerly(
+    streams: S.StreamFile,
+    problem: S.Problem,
+    names: set[str],
+    tests: set[str],
+    ev: Evaluation,
+    eager_streams: set[str] = frozenset(),
+) -> None:
+    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``), and the
+    streams whose info says ``eager`` (one draw), whose domain holds in the real facts and
+    that have no outcome yet (nor, for a stream, a draw at this level or an end)."""
+    found = real_instances(
+        streams, problem, ev.results, functions=names, tests=tests,
+        streams_with_outputs=eager_streams,
+    )  # fmt: skip
+    for inst in found:
+        if inst in ev.outcomes:
+            continue
+        if inst.kind == "stream" and (inst in ev.tried or inst in ev.exhausted):
+            continue
+        res = Result(inst, (), (), (), 0)
+        ok = ev.evaluate(res, {})
+        ev.record(ok, inst.stream)
+
+
+def bound_instance(res: Result, binding: dict[str, str]) -> Instance:
+    """``res``'s stream instance with its optimistic inputs bound to their real names."""
+    inst = res.instance
+    return Instance(inst.stream, tuple(binding.get(y, y) for y in inst.inputs), inst.kind)
+
+
+def real_result(
+    inst: Instance, outputs, decl: S.Stream, mapping: dict[str, str], level: int
+) -> Result:
+    """The real result of ``inst`` (declaration ``decl``; ``mapping``: its parameters -> the
+    real names of its inputs and outputs): the facts it certifies and its domain, grounded."""
+    certified = tuple(
+        ground_atom(a, mapping) for a in S.conjuncts(decl.certified) if isinstance(a, S.Atom)
+    )
+    domain = tuple(
+        ground_atom(a, mapping) for a in S.conjuncts(decl.domain) if isinstance(a, S.Atom)
+    )
+    return Result(inst, tuple(outputs), certified, domain, level, optimistic=False)
+
+
+def renamed(x, mapping: dict[str, str]):
+    """An atom or function term with its arguments renamed (optimistic -> real)."""
+    return replace(x, args=tuple(S.Const(mapping.get(a.name, a.name)) for a in x.args))
+
+
+def bound_result(r: Result, mapping: dict[str, str]) -> Result:
+    """A deferred result with its inputs bound to the real values of the plan."""
+    inst = r.instance
+    return replace(
+        r,
+        instance=Instance(inst.stream, tuple(mapping.get(x, x) for x in inst.inputs), inst.kind),
+        certified=tuple(renamed(f, mapping) for f in r.certified),
+        domain=tuple(renamed(f, mapping) for f in r.domain),
+    )
+
+
+def real_problem(problem, compiled, results, real_functions, later, mapping) -> S.Problem:
+    """The problem a plan bound to drawn values (``mapping``: optimistic -> real) is checked in:
+    the problem's facts and those of the real ``results``; with deferred results (``later``),
+    their facts and optimistic cost terms over the values drawn for their inputs (paper §VII);
+    the problem's numeric values and the real function values over those."""
+    facts = {f for f in problem.init if isinstance(f, S.Atom)}
+    for r in results:
+        facts.update(r.certified)
+    terms: dict[S.FuncTerm, float] = {}
+    for r in later:
+        facts.update(renamed(a, mapping) for a in r.certified)
+    if later:
+        for v in compiled.source_problem.init:
+            if isinstance(v, S.InitValue):
+                terms[renamed(v.fluent, mapping)] = v.value.value
+    for v in problem.init:
+        if isinstance(v, S.InitValue):
+            terms[v.fluent] = v.value.value
+    terms.update(real_functions)
+    values = tuple(S.InitValue(t, S.Num(x)) for t, x in terms.items())
+    return replace(compiled.source_problem, init=tuple(sorted(facts, key=str)) + values)

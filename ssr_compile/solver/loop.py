@@ -1,0 +1,189 @@
+"""What the solver's loops share (:class:`SolverLoop`): one call of
+:func:`~ssr_compile.solver.solve`, its options, its stream evaluation and statistics, compiling
+the optimistic problem of a level and calling the planner on it."""
+
+from __future__ import annotations
+
+import time
+
+from .. import syntax as S
+from ..compile.instantiate import Instantiation, Result
+from ..compile.pipeline import compile_problem
+from ..errors import InstanceCapReached
+from ..planners import fd as _default_backend  # noqa: F401 - the default, loaded with the solver
+from ..planners import get_planner
+from ..stream import StreamsModule, ValueTable
+from .evaluation import Evaluation, evaluate_eagerly
+from .options import ReplanState, SolveOptions
+from .preimage import Preimage, plan_preimage, stream_plan
+from .results import Solution, Statistics
+
+
+class SolverLoop:
+    """One call of :func:`~ssr_compile.solver.solve`; each algorithm's loop derives from it
+    and defines :meth:`run`."""
+
+    def __init__(
+        self,
+        domain: S.Domain,
+        streams: S.StreamFile,
+        problem: S.Problem,
+        module: StreamsModule,
+        state: ReplanState,
+        options: SolveOptions,
+    ):
+        self.start = time.monotonic()
+        self.options = options
+        self.deadline = self.start + options.time_limit
+        self.time_limit, self.max_cost, self.defer = (
+            options.time_limit, options.max_cost, options.defer
+        )  # fmt: skip
+        self.max_level = options.max_level
+        self.domain, self.streams, self.problem, self.module = domain, streams, problem, module
+        self.state = state
+        planner = options.planner
+        self.backend = get_planner(planner) if isinstance(planner, str) else planner
+        module.check_against(streams)
+        self.stats = Statistics()
+        self.values = state.values
+        if self.values is None:
+            taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
+            self.values = ValueTable(module.values, taken)
+        self.ev = Evaluation(streams, module, self.values, self.stats)
+        self.ev.results.extend(state.evaluated)
+        self.say = options.progress or (lambda msg: None)
+        self.optimistic_values = {
+            f.name: module.info_for(f.name).optimistic_value
+            for f in streams.functions
+            if module.info_for(f.name).optimistic_value is not None
+        }
+        self.level = max(options.initial_level, 0)
+        self.first_level = self.level
+        self.best_failure = "no plan"
+        self.last_compile = 0.0  # seconds the last optimistic problem took to compile
+        accept_drawn = options.accept_drawn
+        if accept_drawn is None:
+            accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
+        self.accept_drawn = accept_drawn
+        self.eager_seen = -1  # number of real results when cheap functions were last evaluated
+        eager_cost = options.eager_cost
+        self.eager = {
+            f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
+        }
+        self.eager_tests = {
+            s.name
+            for s in streams.streams
+            if options.eager_tests and s.is_test and module.info_for(s.name).cost <= eager_cost
+        }
+        self.eager_streams = {
+            s.name for s in streams.streams if not s.is_test and module.info_for(s.name).eager
+        }
+
+    def run(self) -> Solution:
+        raise NotImplementedError
+
+    def finish(self, status, plan=None, cost=None, certificate=(), deferred=(), message=""):
+        self.stats.total_time = time.monotonic() - self.start
+        sol = Solution(
+            status,
+            plan,
+            cost,
+            list(certificate),
+            self.stats,
+            list(deferred),
+            list(self.ev.results),
+            self.values,
+            message,
+        )
+        if self.problem.metric is not None and not self.backend.capabilities.costs:
+            sol.costs_ignored_by = self.backend.name
+        return sol
+
+    def capped(self, e: InstanceCapReached) -> Solution:
+        """The level would pass the instance cap: a resource limit, like the last level (no
+        plan up to the level before); at the first level it stays an error."""
+        if self.level <= self.first_level:
+            raise e
+        took = time.monotonic() - self.start
+        return self.finish(
+            "unsolvable",
+            message=f"no plan found up to level {self.level - 1} in {took:.1f} s; "
+            f"level {self.level} would pass the cap ({e.message})",
+        )
+
+    def evaluate_cheap_functions(self) -> None:
+        """The cheap cost functions and tests over real arguments, once per new real result
+        (a test that passes adds facts: again until none does)."""
+        while (self.eager or self.eager_tests or self.eager_streams) and len(
+            self.ev.results
+        ) != self.eager_seen:
+            self.eager_seen = len(self.ev.results)
+            evaluate_eagerly(
+                self.streams,
+                self.problem,
+                self.eager,
+                self.eager_tests,
+                self.ev,
+                self.eager_streams,
+            )
+
+    def compile(self):
+        """The optimistic problem of this level, constrained by the inherited plan tail."""
+        started = time.perf_counter()
+        compiled = compile_problem(
+            self.domain,
+            self.streams,
+            self.problem,
+            caps=self.backend.capabilities,
+            level=self.level,
+            evaluated=self.ev.results,
+            disabled=self.ev.tried,
+            exhausted=self.ev.exhausted,
+            function_values=self.optimistic_values,
+            real_function_values=self.ev.real_functions,
+            plan_tail=self.state.tail,
+            is_constant=self.state.is_constant,
+            unit_cost=self.options.unit_cost,
+            share=self.options.share,
+            leaves=self.options.leaves,
+        )
+        self.last_compile = time.perf_counter() - started
+        self.stats.compile_time += self.last_compile
+        return compiled
+
+    def call_planner(self, compiled, remaining: float, bound: float | None):
+        """One backend call, counted in the statistics: its result and the compiled problem's
+        size (objects, facts, values, ground actions if the backend reports them)."""
+        result = self.backend.solve(
+            compiled.domain, compiled.problem, time_limit=max(remaining, 0.01), cost_bound=bound
+        )
+        self.stats.planner_calls += 1
+        self.stats.planner_time += result.time
+        size = problem_size(compiled, getattr(self.backend, "last_operators", None))
+        self.stats.sizes.append(size)
+        return result, size
+
+    def stream_plan_of(
+        self, compiled, result
+    ) -> tuple[list, Preimage, Instantiation | None, list[Result]]:
+        """The planner's plan over the optimistic problem's names, its preimage, the
+        instantiation and the stream plan: the optimistic results the plan needs."""
+        plan = compiled.map_plan(result.actions or [])
+        pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
+        inst = compiled.instantiation
+        needed = stream_plan(inst, pre, plan) if inst else []
+        return plan, pre, inst, needed
+
+
+def problem_size(compiled, operators: int | None) -> tuple[int, int, int, int | None]:
+    """Objects, facts and function values of the optimistic problem, and the ground actions
+    of the planner's task (the planner's count, or the grounding pass's; ``None``: unknown)."""
+    problem = compiled.source_problem or compiled.problem
+    facts = sum(1 for f in problem.init if isinstance(f, S.Atom))
+    grounded = compiled.lowered.grounded if compiled.lowered is not None else None
+    if operators is None and grounded is not None:
+        operators = len(grounded.domain.actions)
+    objects = len(problem.objects) + len(
+        compiled.source_domain.constants if compiled.source_domain else ()
+    )
+    return (objects, facts, len(problem.init) - facts, operators)

@@ -1,0 +1,134 @@
+"""What one call of :func:`~ssr_compile.solver.solve` is given besides the problem: its options
+(:class:`SolveOptions`) and what it inherits from the last call (:class:`ReplanState`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Container, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from .. import syntax as S
+from ..compile.instantiate import Result
+from ..errors import UnsupportedError
+from ..stream import StreamsModule, ValueTable
+
+# The algorithms :func:`~ssr_compile.solver.solve` runs (its registry maps each to its loop).
+ALGORITHMS = ("focused", "adaptive")
+# Cost functions and tests at most this expensive (StreamInfo.cost) are evaluated eagerly.
+EAGER_COST = 0.1
+RESAMPLE = 2  # default ``resample`` of :class:`SolveOptions`
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """The options of one solve.
+
+    ``algorithm``: "focused" (:mod:`ssr_compile.solver.focused`: evaluate each plan's stream
+    plan once, then plan again) or "adaptive" (a queue of plan skeletons sampled incrementally
+    between planner calls: :mod:`ssr_compile.solver.adaptive`).  ``planner``: a backend name
+    or object; ``time_limit`` in seconds; the levels from ``initial_level`` up to
+    ``max_level``; ``max_cost``: plans must cost less; ``defer``: deferred stream evaluation
+    (paper §VII, :func:`~ssr_compile.solver.deferral.reschedule_stream_plan`).
+    Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
+    soon as their arguments are real (before planning), so the planner sees their real
+    values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
+    With ``eager_tests``, so are the tests that cheap: a test that fails on real inputs is
+    never an optimistic fact the planner builds a plan on (one planner call per failed test).
+    ``redraws``: a generator whose draw a test of the same stream plan rejected may draw again
+    at the same level, up to this many times per instance and level, instead of leaving the
+    level without a sample (whose optimistic problem the planner may then have to prove
+    unsolvable, at a cost exponential in the number of objects to arrange); off by default
+    (it is slower on the shipped examples, faster on many blocks: ``bench/scaling_bench.py``).
+    ``resample``: a generator of the stream plan whose draw was rejected by one of the plan's
+    tests draws again at once, up to this many times per other draw of the stream plan that
+    a test checks it against (at least once over), and what depends on it is evaluated again
+    -- a stream call instead of a planner call; one whose draw failed draws again once, while
+    that pays off for its stream (``0``: off).
+    ``accept_drawn``: when every result of a stream plan succeeds and the plan, with the
+    values drawn, is valid and costs no more than planned, it is the solution (no planner call
+    to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
+    cost bounds every plan of the level; a suboptimal one may find a cheaper plan on replanning.
+    ``share``: instances with optimistic inputs share their optimistic outputs (see
+    :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
+    but more real values later (each consumer is evaluated for every value bound to a shared
+    object); off by default, as it is not faster on the shipped examples yet.
+    ``leaves``: one object in the planner's task for all the optimistic leaf outputs of a
+    stream (motion trajectories; :mod:`ssr_compile.compile.leaves`), mapped back per instance;
+    on by default (the kitchen's replans: 4,225 objects down to 128 at the same level).
+    ``unit_cost``: plan with unit action costs.  ``progress``: called with a line of text per
+    iteration and per stream plan (``None``: silent).
+    """
+
+    algorithm: str = "focused"
+    planner: str | Any = "fd"
+    time_limit: float = 60.0
+    initial_level: int = 1
+    max_level: int = 8
+    max_cost: float = math.inf
+    defer: bool = False
+    resample: int = RESAMPLE
+    redraws: int = 0
+    accept_drawn: bool | None = None
+    eager_cost: float = EAGER_COST
+    eager_tests: bool = True
+    unit_cost: bool = False
+    share: bool = False
+    leaves: bool = True
+    progress: Callable[[str], None] | None = None
+
+    def __post_init__(self) -> None:
+        if self.algorithm not in ALGORITHMS:
+            raise ValueError(
+                f"unknown algorithm {self.algorithm!r}: expected one of {', '.join(ALGORITHMS)}"
+            )
+        if self.algorithm == "adaptive" and self.share:
+            raise UnsupportedError(
+                "the adaptive algorithm does not take shared optimistic outputs (share=True); "
+                "use algorithm='focused' for them"
+            )
+
+
+@dataclass
+class ReplanState:
+    """What one replanning call inherits from the last (paper Algorithm 1: ``a_prev``, and
+    ``f_prev``; the solver's own memory of what it already evaluated).
+
+    ``tail``: the unexecuted actions of the last plan (object names), whose structure the next
+    plan keeps (Algorithm 2); ``constants``: the names that are constants in the sense of §VI-A
+    (anything that answers ``name in constants``); ``kept_facts``: ``ConstantFacts(f)``, the
+    certificate's static facts over constants only; ``kept_values``: the Python values of the
+    constants those facts name that are not objects of the next problem (stream outputs such as
+    grasps); ``evaluated``: real stream results kept from earlier calls; ``values``: the table
+    of the objects' names and Python values those results use (``None``: a new table).
+    """
+
+    tail: Sequence[tuple[str, Sequence[str]]] | None = None
+    constants: Container[str] = frozenset()
+    kept_facts: tuple[S.Atom, ...] = ()
+    kept_values: dict[str, Any] = field(default_factory=dict)
+    evaluated: Sequence[Result] = ()
+    values: ValueTable | None = None
+
+    def is_constant(self, name: str) -> bool:
+        return name in self.constants
+
+
+def with_kept(
+    problem: S.Problem, module: StreamsModule, state: ReplanState
+) -> tuple[S.Problem, StreamsModule]:
+    """``s ∪ f_prev``: the problem with the kept constant facts and their objects added (and the
+    objects' Python values in the module)."""
+    if not state.kept_facts:
+        return problem, module
+    declared = {o.name for o in problem.objects}
+    clash = [n for n in state.kept_values if n in declared]
+    values = {k: v for k, v in state.kept_values.items() if k not in clash}
+    extra = tuple(S.Typed(n) for n in values if n not in declared)
+    present = set(problem.init)
+    facts = tuple(
+        f for f in state.kept_facts if f not in present and not any(a.name in clash for a in f.args)
+    )
+    new_problem = replace(problem, objects=problem.objects + extra, init=problem.init + facts)
+    new_module = replace(module, values={**module.values, **values})
+    return new_problem, new_module
