@@ -166,6 +166,8 @@ class Settings:
 
 @dataclass(frozen=True)
 class EpisodeSpec:
+    """One episode of a sweep: a cell of the table (task, variant) and a seed."""
+
     task: Task
     variant: str
     seed: int
