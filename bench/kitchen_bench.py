@@ -17,11 +17,12 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 
-from ssr_compile.sim.tasks import TASKS
 from ssr_compile.streams.kitchen_env import make_episode
 
-from ssr_compile.policy import VARIANTS, PolicySettings, run_policy
+from ssr_compile.catalog import TASKS, VARIANTS
+from ssr_compile.policy import PolicySettings, run_policy
 
 
 def seeds(text: str) -> list[int]:
@@ -58,16 +59,16 @@ def main(argv: list[str] | None = None) -> int:
         args.tasks, args.variants = list(TASKS), list(VARIANTS)
         args.seeds, args.budget = list(range(10)), 600.0
     out = open(args.jsonl, "a") if args.jsonl else None
+    shared = PolicySettings(
+        budget=args.budget,
+        constrained_time=args.constrained_time,
+        unconstrained_time=args.unconstrained_time,
+        max_cycles=args.max_cycles,
+    )
     for task in args.tasks:
         for variant in args.variants:
+            settings = replace(shared, variant=variant)
             for seed in args.seeds:
-                settings = PolicySettings(
-                    variant=variant,
-                    budget=args.budget,
-                    constrained_time=args.constrained_time,
-                    unconstrained_time=args.unconstrained_time,
-                    max_cycles=args.max_cycles,
-                )
                 ep = make_episode(task, seed)
                 start = time.monotonic()
                 try:

@@ -24,13 +24,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ssr_compile.belief.particles import Surface
+from ssr_compile.catalog import TASKS
 
 from .geometry import yaw_of
 from .perception import visible_fraction
 from .robot import ARM_TUCK
 from .world import DRAWER_TRAVEL, DRAWERS, PARK_BASE, World
 
-TASKS = ("inspect", "stow", "swap", "cook")
 Goal = tuple[tuple[str, ...], ...]
 CLOSED_TOL = 0.005
 

@@ -143,15 +143,16 @@ def run_experiment(args: argparse.Namespace) -> int:
     tasks = X.parse_tasks(args.tasks)
     get_planner(args.planner)  # bad input before anything runs
     executor_name = "ray" if args.ray_address else args.executor
-    settings = X.Settings(
+    from ssr_compile.policy import PolicySettings
+
+    policy = PolicySettings(
         budget=args.budget,
         max_cycles=args.max_cycles,
         constrained_time=args.constrained_time,
         unconstrained_time=args.unconstrained_time,
         planner=args.planner,
-        wall_limit=args.wall_limit,
-        memory_mb=args.memory_limit,
     )
+    settings = X.Settings(policy, wall_limit=args.wall_limit, memory_mb=args.memory_limit)
     if executor_name == "ray":
         try:
             import ray  # noqa: F401
@@ -163,7 +164,7 @@ def run_experiment(args: argparse.Namespace) -> int:
     specs = X.episode_specs(tasks, variants, seeds, settings)
     print(
         f"sweep: {len(tasks)} task(s) × {len(variants)} variant(s) × {len(seeds)} seed(s) = "
-        f"{len(specs)} episodes, planning budget {settings.budget:g} s each, wall limit "
+        f"{len(specs)} episodes, planning budget {policy.budget:g} s each, wall limit "
         f"{settings.wall:g} s, executor {executor_name}"
         + (f" ({args.workers} workers)" if args.workers else ""),
         file=sys.stderr,

@@ -8,11 +8,11 @@ import math
 import sys
 from pathlib import Path
 
+from ssr_compile.catalog import TASKS as KITCHEN_TASKS
+
 from .cli import register
 from .errors import SSRError
 from .json_output import SCHEMA_VERSION
-
-KITCHEN_TASKS = ("inspect", "stow", "swap", "cook")
 
 
 def _positive(text: str) -> float:

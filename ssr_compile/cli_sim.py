@@ -7,10 +7,10 @@ import os
 import tempfile
 from pathlib import Path
 
+from ssr_compile.catalog import TASKS
+
 from .cli import register
 from .errors import SSRError
-
-TASKS = ("inspect", "stow", "swap", "cook")
 
 
 def _task_args(p: argparse.ArgumentParser) -> None:

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
+from .catalog import VARIANTS
 from .errors import InstanceCapReached, TimeLimitReached
 from .limits import overrunning_stream, time_limit
 from .solver import RESAMPLE, ReplanState, Solution, SolveOptions, Statistics, Step, solve
@@ -51,15 +52,6 @@ class StreamOverrun(Exception):
     def __str__(self) -> str:
         who = f"stream '{self.stream}'" if self.stream else "a stream"
         return f"{who} did not return within the planning limit ({self.seconds:.1f} s)"
-
-
-VARIANTS: dict[str, tuple[bool, bool]] = {
-    # name: (plan constraints, deferred streams) -- Table I's four columns
-    "neither": (False, False),
-    "constraints": (True, False),
-    "deferred": (False, True),
-    "both": (True, True),
-}
 
 
 # ---------------------------------------------------------------- the contract

@@ -119,7 +119,7 @@ def test_sweep_runs_resumes_and_reports(tmp_path, capsys):
     ok = [r["planning_time"] for r in recs if r["variant"] == "both" and r["success"]]
     row = next(x for x in rebuilt.splitlines() if x.startswith("| **progress** | ours"))
     assert f"100 [{100 * X.wilson(3, 3)[0]:.0f}, 100] (n=3)" in row
-    assert X._fmt_time(sum(ok) / len(ok)) in row.split("|")[-2]
+    assert X.fmt_time(sum(ok) / len(ok)) in row.split("|")[-2]
 
 
 def _record(task, variant, seed, success, t=None, status="finished"):
@@ -182,7 +182,7 @@ def test_report_numbers_are_recomputed_from_the_json_lines(tmp_path, capsys):
     neither_pct, neither_t, both_pct, both_t = rows[("Inspect", "ours")]
     assert both_pct == f"75 [{100 * lo:.0f}, {100 * hi:.0f}] (n=4)"
     b_lo, b_hi = X.bootstrap_mean(times, X.cell_seed("inspect", "both"))
-    assert both_t == f"40.0 [{X._fmt_time(b_lo)}, {X._fmt_time(b_hi)}]"
+    assert both_t == f"40.0 [{X.fmt_time(b_lo)}, {X.fmt_time(b_hi)}]"
     assert 30 <= b_lo <= 40 <= b_hi <= 50
     lo, hi = _wilson(1, 4)
     assert neither_pct == f"25 [{100 * lo:.0f}, {100 * hi:.0f}] (n=4)"
@@ -542,6 +542,6 @@ def test_sweeps_are_merged_into_one_table_with_the_details(tmp_path, capsys):
 
 
 def test_seed_lists_are_folded():
-    assert X._seed_list([5, 0, 1, 2, 7, 8, 3]) == "0-3,5,7-8"
-    assert X._seed_list([]) == "–"
-    assert X._median([3.0, 1.0, 2.0, 10.0]) == 2.5
+    assert X.seed_list([5, 0, 1, 2, 7, 8, 3]) == "0-3,5,7-8"
+    assert X.seed_list([]) == "–"
+    assert X.median([3.0, 1.0, 2.0, 10.0]) == 2.5
