@@ -16,6 +16,13 @@ from dataclasses import dataclass, field
 
 from . import syntax as S
 from .errors import CheckError
+from .formulas import (
+    atoms,
+    changed_atoms,
+    domain_requirements,
+    free_variables,
+    undeclared_requirements,
+)
 
 BUILTIN_TYPES = frozenset({"object", "number"})
 COST = "total-cost"
@@ -122,24 +129,6 @@ def _stream_file_predicates(f: S.StreamFile) -> dict[str, int]:
     return out
 
 
-def atoms(f) -> list[S.Atom]:
-    """Every atom in a formula or effect (in order)."""
-    return [x for x in S.walk(f) if isinstance(x, S.Atom)]
-
-
-def changed_atoms(effect) -> list[S.Atom]:
-    """The atoms an effect adds or deletes (in order): a ``when``'s condition only reads."""
-    if isinstance(effect, S.And):
-        return [a for e in effect.args for a in changed_atoms(e)]
-    if isinstance(effect, S.Forall):
-        return changed_atoms(effect.body)
-    if isinstance(effect, S.When):
-        return changed_atoms(effect.effect)
-    if isinstance(effect, S.Not):
-        return changed_atoms(effect.arg)
-    return [effect] if isinstance(effect, S.Atom) else []
-
-
 # ---------------------------------------------------------------- formulas
 
 
@@ -158,61 +147,30 @@ class _FormulaChecker:
         self.constants_known = constants_known
         self.v = vocab
         self.objects = objects if objects is not None else {}
-        self.used: set[str] = set()  # requirement flags the formulas need
+        self.typed = False  # does a parameter, constant or type name a type?
         # checking a domain: names it uses without declaring them (-> first use)
         self.domain_names: dict[str, S.Span | None] | None = None
 
-    def formula(self, f, scope: frozenset[str], where: str, effect: bool = False) -> None:
-        if f is None:
-            return
-        if isinstance(f, S.Atom):
+    def formula(self, f, scope: frozenset[str], where: str) -> None:
+        """Check a condition or effect (requirement flags: see formulas.domain_requirements)."""
+        kind = type(f)
+        if kind is S.Atom:
             self.atom(f, scope, where)
-        elif isinstance(f, S.And):
-            for a in f.args:
-                self.formula(a, scope, where, effect)
-        elif isinstance(f, S.Or):
-            self.used.add(":disjunctive-preconditions")
-            for a in f.args:
-                self.formula(a, scope, where, effect)
-        elif isinstance(f, S.Not):
-            if not effect:
-                self.used.add(":negative-preconditions")
-            self.formula(f.arg, scope, where, effect)
-        elif isinstance(f, S.Imply):
-            self.used.add(":disjunctive-preconditions")
-            self.formula(f.left, scope, where)
-            self.formula(f.right, scope, where)
-        elif isinstance(f, (S.Exists, S.Forall)):
-            if isinstance(f, S.Exists):
-                self.used.add(":existential-preconditions")
-            else:
-                self.used.add(":conditional-effects" if effect else ":universal-preconditions")
+        elif kind is S.Exists or kind is S.Forall:
             self.params(f.params, where)
-            self.formula(f.body, scope | {p.name for p in f.params}, where, effect)
-        elif isinstance(f, S.When):
-            self.used.add(":conditional-effects")
-            self.formula(f.condition, scope, where)
-            self.formula(f.effect, scope, where, effect=True)
-        elif isinstance(f, S.Compare):
-            self.used.add(":numeric-fluents")
+            self.formula(f.body, scope | {p.name for p in f.params}, where)
+        elif kind is S.Compare:
             self.num(f.left, scope, where)
             self.num(f.right, scope, where)
-        elif isinstance(f, S.NumericEffect):
-            if f.fluent.name == COST:
-                self.used.add(":action-costs")
-                self.fluent(f.fluent, scope, where)
-                self.num(f.value, scope, where, cost=True)
-            else:
-                self.used.add(":numeric-fluents")
-                self.fluent(f.fluent, scope, where)
-                self.num(f.value, scope, where)
-        elif isinstance(f, S.Timed):
-            self.formula(f.body, scope, where, effect)
+        elif kind is S.NumericEffect:
+            self.fluent(f.fluent, scope, where)
+            self.num(f.value, scope, where, cost=f.fluent.name == COST)
+        else:  # and, or, not, imply, when, timed
+            for part in S.children(f):
+                self.formula(part, scope, where)
 
     def atom(self, a: S.Atom, scope: frozenset[str], where: str) -> None:
-        if a.pred == "=":
-            self.used.add(":equality")
-        else:
+        if a.pred != "=":
             arity = self.v.predicate_arity(a.pred)
             if arity is None:
                 self.r.error(f"undeclared predicate '{a.pred}' in {where}", a.span)
@@ -256,8 +214,6 @@ class _FormulaChecker:
         if f.name == COST:
             if f.args:
                 self.r.error(f"total-cost takes no arguments, found {len(f.args)}", f.span)
-            if COST not in self.v.functions:
-                self.used.add(":action-costs")
         else:
             arity = self.v.functions.get(f.name, self.v.stream_functions.get(f.name))
             if arity is None:
@@ -309,7 +265,7 @@ class _FormulaChecker:
     def type_ref(self, t: S.TypeRef, span, where: str) -> None:
         if t is None:
             return
-        self.used.add(":typing")
+        self.typed = True
         for name in t.types if isinstance(t, S.Either) else (t,):
             if name not in BUILTIN_TYPES and name not in self.v.types:
                 self.r.error(f"undeclared type '{name}' in {where}", span)
@@ -348,30 +304,6 @@ def _duplicate_declarations(report: Report, decls: tuple[S.PredicateDecl, ...]) 
             )
 
 
-def _requirements(report: Report, declared: tuple[str, ...] | None, used: set[str], span) -> None:
-    if declared is None:
-        return
-    implied = set(declared)
-    if ":adl" in implied:
-        implied |= {
-            ":strips",
-            ":typing",
-            ":negative-preconditions",
-            ":disjunctive-preconditions",
-            ":equality",
-            ":existential-preconditions",
-            ":universal-preconditions",
-            ":conditional-effects",
-        }
-    if ":quantified-preconditions" in implied:
-        implied |= {":existential-preconditions", ":universal-preconditions"}
-    if ":fluents" in implied:
-        implied |= {":numeric-fluents"}
-    missing = sorted(used - implied)
-    if missing:
-        report.warn("uses requirements it does not declare: " + " ".join(missing), span)
-
-
 # ---------------------------------------------------------------- files
 
 
@@ -401,7 +333,6 @@ def check_domain(
         fc.params(f.params, f"the declaration of function '{f.name}'")
     derived_heads: set[str] = set()
     for ax in domain.axioms:
-        fc.used.add(":derived-predicates")
         where = f"derived predicate '{ax.name}'"
         declared = domain.predicates and ax.name in {p.name for p in domain.predicates}
         if ax.name not in derived_heads and not declared and domain.predicates:
@@ -416,7 +347,7 @@ def check_domain(
             )
         head = frozenset(p.name for p in ax.parameters)
         extra = []
-        for v in variables(ax.body):
+        for v in free_variables(ax.body):
             if v.name not in head and v.name not in extra:
                 extra.append(v.name)
                 report.warn(
@@ -431,14 +362,13 @@ def check_domain(
         fc.params(a.parameters, where)
         scope = frozenset(p.name for p in a.parameters)
         fc.formula(a.precondition, scope, f"the precondition of {where}")
-        fc.formula(a.effect, scope, f"the effect of {where}", effect=True)
+        fc.formula(a.effect, scope, f"the effect of {where}")
         for atom in changed_atoms(a.effect):
             if atom.pred in derived_heads:
                 report.error(
                     f"the effect of {where} changes derived predicate '{atom.pred}'", atom.span
                 )
     for a in domain.durative_actions:
-        fc.used.add(":durative-actions")
         where = f"durative action '{a.name}'"
         fc.params(a.parameters, where)
         scope = frozenset(p.name for p in a.parameters) | {"?duration"}
@@ -448,8 +378,17 @@ def check_domain(
         else:
             fc.formula(a.duration, scope, f"the duration of {where}")
         fc.formula(a.condition, scope, f"the condition of {where}")
-        fc.formula(a.effect, scope, f"the effect of {where}", effect=True)
-    _requirements(report, domain.requirements, fc.used, domain.span)
+        fc.formula(a.effect, scope, f"the effect of {where}")
+    if domain.requirements is not None:
+        sections = {
+            ":typing": fc.typed,
+            ":derived-predicates": bool(domain.axioms),
+            ":durative-actions": bool(domain.durative_actions),
+        }
+        used = domain_requirements(domain) | {flag for flag, on in sections.items() if on}
+        missing = undeclared_requirements(domain.requirements, used)
+        if missing:
+            report.warn("uses requirements it does not declare: " + " ".join(missing), domain.span)
     if streams is not None:
         for name in sorted(vocab.stream_predicates):
             used_in_domain = any(
@@ -509,7 +448,7 @@ def check_problem(
         if isinstance(fact, S.InitValue):
             fc.fluent(fact.fluent, frozenset(), "the initial state")
         else:
-            fc.formula(fact, frozenset(), "the initial state", effect=True)
+            fc.formula(fact, frozenset(), "the initial state")
     fc.formula(problem.goal, frozenset(), "the goal")
     if problem.metric is not None:
         fc.num(problem.metric.expr, frozenset(), "the metric", cost=True)
@@ -561,7 +500,7 @@ def check_streams(
         for o in s.outputs:
             if o.name in inputs:
                 report.error(f"{o.name} is both an input and an output of {where}", o.span)
-        for v in variables(s.domain):
+        for v in free_variables(s.domain):
             if v.name in {o.name for o in s.outputs}:
                 report.error(
                     f"output {v.name} is used in the domain of {where}; the domain may only use inputs",
@@ -572,15 +511,15 @@ def check_streams(
                     f"free variable {v.name} in the domain of {where}: not an input", v.span
                 )
         scope = frozenset(inputs | {o.name for o in s.outputs})
-        for v in variables(s.certified):
+        for v in free_variables(s.certified):
             if v.name not in scope:
                 report.error(
                     f"variable {v.name} in the certified facts of {where} is neither an input nor an output",
                     v.span,
                 )
-        checker_scope = scope | frozenset(v.name for v in variables(s.domain))
+        checker_scope = scope | frozenset(v.name for v in free_variables(s.domain))
         fc.formula(s.domain, checker_scope, f"the domain of {where}")
-        fc.formula(s.certified, checker_scope, f"the certified facts of {where}", effect=True)
+        fc.formula(s.certified, checker_scope, f"the certified facts of {where}")
         consistent(s.domain, f"the domain of {where}")
         consistent(s.certified, f"the certified facts of {where}")
         if declared is not None:
@@ -592,7 +531,7 @@ def check_streams(
     for r in f.rules:
         scope = frozenset(p.name for p in r.inputs)
         for formula, what in ((r.domain, "domain"), (r.certified, "certified facts")):
-            for v in variables(formula):
+            for v in free_variables(formula):
                 if v.name not in scope:
                     report.error(
                         f"variable {v.name} in the {what} of a :rule is not an input", v.span
@@ -603,7 +542,7 @@ def check_streams(
         for d in group:
             scope = frozenset(p.name for p in d.params)
             fc.params(d.params, f"{kind} '{d.name}'")
-            for v in variables(d.domain):
+            for v in free_variables(d.domain):
                 if v.name not in scope:
                     report.error(
                         f"free variable {v.name} in the domain of {kind} '{d.name}'", v.span
@@ -646,7 +585,7 @@ def undeclared_domain_names(domain: S.Domain) -> dict[str, S.Span | None]:
     for a in (*domain.actions,):
         scope = frozenset(p.name for p in a.parameters)
         fc.formula(a.precondition, scope, "a precondition")
-        fc.formula(a.effect, scope, "an effect", effect=True)
+        fc.formula(a.effect, scope, "an effect")
     for ax in domain.axioms:
         fc.formula(ax.body, frozenset(p.name for p in ax.parameters), "an axiom")
     return fc.domain_names
@@ -683,47 +622,7 @@ def _unbound_head(report: Report, ax: S.Axiom, where: str) -> None:
             )
 
 
-def variables(f) -> list[S.Var]:
-    """Free variables of a formula, in order of appearance (quantified ones excluded)."""
-    out: list[S.Var] = []
-
-    def visit(x, bound: frozenset[str]):
-        if isinstance(x, S.Atom):
-            out.extend(t for t in x.args if isinstance(t, S.Var) and t.name not in bound)
-        elif isinstance(x, (S.And, S.Or)):
-            for a in x.args:
-                visit(a, bound)
-        elif isinstance(x, S.Not):
-            visit(x.arg, bound)
-        elif isinstance(x, S.Imply):
-            visit(x.left, bound)
-            visit(x.right, bound)
-        elif isinstance(x, (S.Exists, S.Forall)):
-            visit(x.body, bound | {p.name for p in x.params})
-        elif isinstance(x, S.When):
-            visit(x.condition, bound)
-            visit(x.effect, bound)
-        elif isinstance(x, S.Timed):
-            visit(x.body, bound)
-        elif isinstance(x, S.Compare):
-            for side in (x.left, x.right):
-                out.extend(v for v in _num_vars(side) if v.name not in bound)
-
-    visit(f, frozenset())
-    return out
-
-
-def _num_vars(e) -> list[S.Var]:
-    if isinstance(e, S.Var):
-        return [e]
-    if isinstance(e, S.FuncTerm):
-        return [t for t in e.args if isinstance(t, S.Var)]
-    if isinstance(e, S.Arith):
-        return [v for a in e.args for v in _num_vars(a)]
-    return []
-
-
 def _free_variables(report: Report, f, scope: frozenset[str], where: str) -> None:
-    for v in variables(f):
+    for v in free_variables(f):
         if v.name not in scope:
             report.error(f"free variable {v.name} in {where}", v.span)

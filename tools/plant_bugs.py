@@ -31,7 +31,7 @@ MUTANTS = {
     ),
     "derived: bound variables not renamed apart": (
         "ssr_compile/compile/derived.py",
-        'renaming = {v: S.Var(f"{v}-d{n}") for v in variables_in(ax.body)}',
+        'renaming = {v: S.Var(f"{v}-d{n}") for v in variable_names(ax.body)}',
         "renaming = {}",
     ),
     "derived: goal not expanded": (

@@ -40,8 +40,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
-from ..check import changed_atoms
 from ..errors import UnsupportedError
+from ..formulas import changed_atoms
 from .formulas import conj, substitute
 from .result import PassResult
 

@@ -16,9 +16,9 @@ import itertools
 from dataclasses import replace
 
 from .. import syntax as S
-from ..check import atoms, variables
 from ..errors import UnsupportedError
-from .formulas import conj, map_atoms, substitute, variables_in
+from ..formulas import atoms, free_variables, variable_names
+from .formulas import conj, map_atoms, substitute
 from .result import PassResult
 
 
@@ -59,7 +59,7 @@ def normalise_axiom_bodies(domain: S.Domain) -> S.Domain:
     axioms = []
     for ax in domain.axioms:
         head = {p.name for p in ax.parameters}
-        free = [v.name for v in variables(ax.body) if v.name not in head]
+        free = [v.name for v in free_variables(ax.body) if v.name not in head]
         body = ax.body
         if free:
             body = S.Exists(tuple(S.Typed(v) for v in dict.fromkeys(free)), body)
@@ -98,7 +98,7 @@ def compile_away(domain: S.Domain, problem: S.Problem | None = None) -> PassResu
         for ax in axioms:
             n = next(counter)
             # Rename every variable of the body apart, then bind the head to the arguments.
-            renaming = {v: S.Var(f"{v}-d{n}") for v in variables_in(ax.body)}
+            renaming = {v: S.Var(f"{v}-d{n}") for v in variable_names(ax.body)}
             body = _rename_bound(ax.body, renaming)
             mapping = {p.name: arg for p, arg in zip(ax.parameters, atom.args)}
             mapping = {renaming.get(k, S.Var(k)).name: v for k, v in mapping.items()}

@@ -138,14 +138,3 @@ def dnf(f, limit: int = 4096) -> list[list]:
 def has(f, *types) -> bool:
     """Does the formula contain a node of one of ``types``?"""
     return any(isinstance(x, types) for x in S.walk(f))
-
-
-def variables_in(f) -> set[str]:
-    """All variable names occurring in a formula (bound or free)."""
-    out: set[str] = set()
-    for x in S.walk(f):
-        if isinstance(x, S.Var):
-            out.add(x.name)
-        elif isinstance(x, S.Exists | S.Forall):
-            out.update(p.name for p in x.params)
-    return out

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
+from ..formulas import match
 from .derived import compile_away
 from .formulas import nnf
 from .result import PassResult, Plan
@@ -123,26 +124,9 @@ def _join(
 
         i = max(range(len(todo)), key=lambda k: bound_count(todo[k]))
         atom, rest = todo[i], todo[:i] + todo[i + 1 :]
-        pattern = [t.name if not isinstance(t, S.Var) else b.get(t.name) for t in atom.args]
-        names = [t.name if isinstance(t, S.Var) else None for t in atom.args]
         for row in lookup(atom.pred):
-            if len(row) != len(pattern):
-                continue
-            ext = dict(b)
-            ok = True
-            for value, fixed, var in zip(row, pattern, names):
-                if fixed is not None:
-                    if value != fixed:
-                        ok = False
-                        break
-                elif var is not None:
-                    seen = ext.get(var)
-                    if seen is None:
-                        ext[var] = value
-                    elif seen != value:
-                        ok = False
-                        break
-            if ok:
+            ext = match(atom, row, b)
+            if ext is not None:
                 yield from rec(rest, ext)
 
     yield from rec(atoms, dict(binding))

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from .. import syntax as S
+from ..formulas import atoms, free_variables
 from .result import PassResult
 
 
@@ -31,9 +32,7 @@ def changed_predicates(domain: S.Domain) -> set[str]:
     """Predicates some action's effect adds or deletes, and the derived ones."""
     out = {ax.name for ax in domain.axioms}
     for a in domain.actions:
-        for x in S.walk(a.effect):
-            if isinstance(x, S.Atom):
-                out.add(x.pred)
+        out.update(x.pred for x in atoms(a.effect))  # a when's condition included
     return out
 
 
@@ -85,7 +84,7 @@ def _guard(part, static: list[S.Atom], params: set[str]):
     else:
         return part
     bound = {p.name for p in quantified.params}  # a guard naming these would be captured
-    free = _free(quantified) & params
+    free = {v.name for v in free_variables(quantified)} & params
     if not free:
         return part
     guard = tuple(
@@ -101,21 +100,3 @@ def _guard(part, static: list[S.Atom], params: set[str]):
         return S.Forall(part.params, S.Imply(g, part.body), span=part.span)
     body = S.And((*guard, *S.conjuncts(quantified.body)))
     return S.Not(S.Exists(quantified.params, body, span=quantified.span), span=part.span)
-
-
-def _free(f) -> set[str]:
-    """Free variable names of a formula."""
-    out: set[str] = set()
-
-    def walk(x, bound: frozenset):
-        if isinstance(x, S.Var):
-            if x.name not in bound:
-                out.add(x.name)
-        elif isinstance(x, S.Exists | S.Forall):
-            walk(x.body, bound | {p.name for p in x.params})
-        else:
-            for c in S.children(x):
-                walk(c, bound)
-
-    walk(f, frozenset())
-    return out

@@ -23,8 +23,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
-from ..check import atoms
 from ..errors import InstanceCapReached, UnsupportedError
+from ..formulas import atoms, unify
 from .result import PassResult
 
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
@@ -444,26 +444,6 @@ def _matches(params, domain, index, levels, fresh=None):
             for binding, used in extend(rest, 0, start, []):
                 used.insert(k, fact)
                 yield binding, used
-
-
-def unify(pattern: S.Atom, fact: S.Atom, binding: dict[str, str]) -> dict[str, str] | None:
-    """``binding`` extended so that ``pattern`` matches the ground ``fact`` (a new dict only when
-    something is added), or None when they do not match."""
-    if len(pattern.args) != len(fact.args):
-        return None
-    new = binding
-    for p, f in zip(pattern.args, fact.args):
-        if isinstance(p, S.Var):
-            bound = new.get(p.name)
-            if bound is None:
-                if new is binding:
-                    new = dict(binding)
-                new[p.name] = f.name
-            elif bound != f.name:
-                return None
-        elif p.name != f.name:
-            return None
-    return new
 
 
 def _eq_holds(atom: S.Atom, binding: dict[str, str]) -> bool:

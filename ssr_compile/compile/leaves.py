@@ -35,8 +35,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 from .. import syntax as S
-from ..check import atoms
 from ..errors import SSRError
+from ..formulas import atoms
 from .instantiate import Instantiation
 from .result import PassResult, Plan
 

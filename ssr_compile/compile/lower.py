@@ -17,7 +17,7 @@ pass with the common contract (:class:`~.result.PassResult`):
   equality with constants substituted into the action (its parameter disappears)
   (:mod:`.negations`);
 * costs -> unit costs (else integer costs, scaled and rounded up) (:mod:`.costs`);
-* requirements -> the flags the task really uses (:func:`requirements_of`);
+* requirements -> the flags the task really uses (:func:`~ssr_compile.formulas.requirements_of`);
 * names -> renamed where a reader would refuse them (an action named like a predicate, ``@x``)
   (:mod:`.rename`).
 
@@ -30,10 +30,11 @@ from dataclasses import dataclass, replace
 
 from .. import syntax as S
 from ..errors import UnsupportedError
+from ..formulas import requirements_of
 from .costs import compile_costs
 from .derived import compile_away, normalise_axiom_bodies
 from .disjunctions import GOAL_ACTION, GOAL_REACHED, split_disjunctions  # noqa: F401
-from .formulas import has, map_atoms
+from .formulas import has
 from .ground import Grounded, ground
 from .guards import guard_quantifiers
 from .negations import DISTINCT, remove_negations  # noqa: F401
@@ -118,37 +119,3 @@ def lower(
     # predicate may not share a name) and wants plain identifiers: rename what offends it.
     steps.append(rename_task(*steps[-1].task))
     return Lowered(*steps[-1].task, costed.scale, tuple(steps))
-
-
-def requirements_of(domain: S.Domain, problem: S.Problem) -> tuple[str, ...]:
-    """The requirement flags the (lowered) domain and problem really use."""
-    used = [":strips"]
-    conds = (
-        [a.precondition for a in domain.actions]
-        + [ax.body for ax in domain.axioms]
-        + [problem.goal]
-    )
-    conds = [c for c in conds if c is not None]
-    effects = [a.effect for a in domain.actions if a.effect is not None]
-    found: list[S.Atom] = []
-    for c in conds:
-        map_atoms(c, lambda a: found.append(a) or a)
-    if domain.types or any(o.type for o in problem.objects):
-        used.append(":typing")
-    if any(has(c, S.Not) for c in conds):
-        used.append(":negative-preconditions")
-    if any(has(c, S.Or, S.Imply) for c in conds):
-        used.append(":disjunctive-preconditions")
-    if any(a.pred == "=" for a in found):
-        used.append(":equality")
-    if any(has(c, S.Exists) for c in conds):
-        used.append(":existential-preconditions")
-    if any(has(c, S.Forall) for c in conds):
-        used.append(":universal-preconditions")
-    if any(has(e, S.When, S.Forall) for e in effects):
-        used.append(":conditional-effects")
-    if domain.axioms:
-        used.append(":derived-predicates")
-    if problem.metric is not None:
-        used.append(":action-costs")
-    return tuple(used)

@@ -137,7 +137,7 @@ def _cpu_time() -> float | None:
 # What the fork server imports once; importing the last, this module, also warms it (below).
 _PRELOAD = [
     "ssr_compile.policy",
-    "ssr_compile.focused",
+    "ssr_compile.solver",
     "numpy",
     "ssr_compile.experiment.isolation",
 ]

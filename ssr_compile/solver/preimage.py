@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 
 from .. import syntax as S
 from ..compile.formulas import substitute
-from ..compile.instantiate import Instantiation, Result, unify
+from ..compile.instantiate import Instantiation, Result
 from ..errors import SSRError
+from ..formulas import unify
 
 Plan = Sequence[tuple[str, Sequence[str]]]
 
