@@ -140,10 +140,10 @@ def kitchen_has_environment() -> bool:
     """Whether the kitchen example names a closed-loop environment (then Table I's tasks are
     the default of ``--tasks``)."""
     try:
-        from .examples import read_config, resolve_folder
+        from .examples import read_settings, resolve_folder
 
         folder = resolve_folder("kitchen")
-        return folder is not None and bool(read_config(folder).get("environment"))
+        return folder is not None and bool(read_settings(folder).environment)
     except SSRError:
         return False
 
@@ -1247,7 +1247,7 @@ def write_report(
     variant and seed wins -- are written to ``out_dir/episodes.jsonl`` first, so that the
     merged folder is a report of its own; the commands recorded in the sources' tables are
     kept in the new one."""
-    from .cli import write_atomically
+    from .files import write_atomically
 
     out = Path(out_dir)
     if sources:
