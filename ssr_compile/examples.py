@@ -13,7 +13,7 @@ An example is found (:func:`resolve_folder`) and its ``example.toml`` read
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -69,7 +69,7 @@ class ExampleSettings:
 
     file: Path | None = None
     streams: str | None = None
-    problems: tuple[str, ...] | None = None
+    problems: Sequence[str] | None = None
     environment: str | None = None
     solver: Mapping[str, Any] = field(default_factory=dict)
     sources: Mapping[str, str] = field(default_factory=dict)
@@ -77,11 +77,10 @@ class ExampleSettings:
     @classmethod
     def from_table(cls, table: Mapping[str, Any], file: Path | None = None) -> ExampleSettings:
         """The settings of a parsed ``example.toml`` (``file``: where it was read)."""
-        problems = table.get("problems")
         return cls(
             file=file,
             streams=table.get("streams"),
-            problems=None if problems is None else tuple(problems),
+            problems=table.get("problems"),
             environment=table.get("environment"),
             solver={k: table[k] for k in SOLVER_KEYS if k in table},
             sources={k: SETTINGS_FILE for k in table},
