@@ -1,16 +1,19 @@
 """Example folders: ``domain.pddl``, ``stream.pddl``, problems and ``example.toml``.
 
 ``example.toml`` keys: ``streams`` (the streams module, an import path or a ``.py`` file),
-``problems`` (file names), optional solver settings (``level``, ``planner``, ``defer``,
-``time_limit``, ``max_level``) and, for the online policy, ``environment``: a factory
-``"module:function"`` called as ``function(problem, seed)`` that returns an
+``problems`` (file names), optional solver settings (:data:`SOLVER_KEYS`: ``planner``,
+``time_limit``, ``level``, ``max_level``, ...) and, for the online policy, ``environment``: a
+factory ``"module:function"`` called as ``function(problem, seed)`` that returns an
 :class:`ssr_compile.policy.Episode` (an environment and the agent acting in it).
+
+An example is found (:func:`resolve_folder`) and its ``example.toml`` read
+(:func:`read_settings`) here only: ``solve``, ``run`` and ``experiment`` all come through here.
 """
 
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -41,10 +44,57 @@ SHIPPED_PROBLEMS: tuple[tuple[str, str, int], ...] = (
 )
 
 
+# The solver settings example.toml may give (``ssr-compile solve`` has a flag for each).
+SOLVER_KEYS = (
+    "planner",
+    "time_limit",
+    "level",
+    "max_level",
+    "max_cost",
+    "defer",
+    "algorithm",
+    "resample",
+    "seed",
+)
+SETTINGS_FILE = "example.toml"
+
+
+@dataclass(frozen=True)
+class ExampleSettings:
+    """What an example folder's ``example.toml`` says, and where each value came from.
+
+    Values are kept as written; ``ssr-compile solve`` validates the solver settings as it
+    validates its options.  ``file`` is None for no example (files named one by one).
+    """
+
+    file: Path | None = None
+    streams: str | None = None
+    problems: Sequence[str] | None = None
+    environment: str | None = None
+    solver: Mapping[str, Any] = field(default_factory=dict)
+    sources: Mapping[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], file: Path | None = None) -> ExampleSettings:
+        """The settings of a parsed ``example.toml`` (``file``: where it was read)."""
+        return cls(
+            file=file,
+            streams=table.get("streams"),
+            problems=table.get("problems"),
+            environment=table.get("environment"),
+            solver={k: table[k] for k in SOLVER_KEYS if k in table},
+            sources={k: SETTINGS_FILE for k in table},
+        )
+
+    def source(self, key: str) -> str | None:
+        """Where ``key``'s value came from (None: not given)."""
+        return self.sources.get(key)
+
+
 @dataclass(frozen=True)
 class Example:
     folder: Path
-    config: dict = field(hash=False, compare=False)
+    settings: ExampleSettings = field(hash=False, compare=False)
     domain: S.Domain = field(hash=False, compare=False)
     streams: S.StreamFile = field(hash=False, compare=False)
 
@@ -54,7 +104,7 @@ class Example:
 
     def environment_factory(self) -> Callable[..., Any]:
         """The ``environment`` factory of ``example.toml``; bad input if absent or broken."""
-        spec = self.config.get("environment")
+        spec = self.settings.environment
         if not spec:
             raise SSRError(
                 f"the example '{self.name}' names no environment in example.toml "
@@ -89,8 +139,9 @@ def resolve_folder(name: str | Path) -> Path | None:
     return shipped if shipped.is_dir() else None
 
 
-def read_config(folder: Path) -> dict:
-    config_file = folder / "example.toml"
+def read_settings(folder: Path) -> ExampleSettings:
+    """Read ``folder``'s example.toml (bad input if it is missing or not TOML)."""
+    config_file = folder / SETTINGS_FILE
     if not config_file.exists():
         raise SSRError(
             f"no example.toml in {folder} (it names the streams module: "
@@ -98,9 +149,16 @@ def read_config(folder: Path) -> dict:
             file=str(folder),
         )
     try:
-        return tomllib.loads(config_file.read_text(encoding="utf-8"))
+        table = tomllib.loads(config_file.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise SSRError(f"not valid TOML: {e}", file=str(config_file)) from None
+    return ExampleSettings.from_table(table, config_file)
+
+
+def example_files(folder: Path) -> list[Path]:
+    """An example folder's domain, stream and problem files, in that order."""
+    rest = sorted(p for p in folder.glob("*.pddl") if p.name not in ("domain.pddl", "stream.pddl"))
+    return [folder / "domain.pddl", folder / "stream.pddl", *rest]
 
 
 def load_example(name: str | Path) -> Example:
@@ -113,13 +171,10 @@ def load_example(name: str | Path) -> Example:
 
 @lru_cache(maxsize=32)
 def _load(folder: Path) -> Example:
-    import argparse
+    from .inputs import load_inputs
 
-    from .cli_compile import load_inputs
-
-    config = read_config(folder)
-    ns = argparse.Namespace(
-        domain=str(folder / "domain.pddl"), stream=str(folder / "stream.pddl"), problem=None
+    settings = read_settings(folder)
+    domain, streams, _ = load_inputs(
+        str(folder / "domain.pddl"), str(folder / "stream.pddl"), None, []
     )
-    domain, streams, _ = load_inputs(ns, [])
-    return Example(folder, config, domain, streams)
+    return Example(folder, settings, domain, streams)

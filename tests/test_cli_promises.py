@@ -57,7 +57,7 @@ def test_verbose_prints_each_setting_and_its_source(capsys):
 
 def test_every_example_setting_can_be_overridden(capsys):
     # the kitchen's example.toml turns deferral on; --no-defer turns it off again
-    from ssr_compile.cli_solve import resolve_settings
+    from ssr_compile.cli.solve import resolve_settings
 
     ns = build_parser().parse_args(["solve", "kitchen", "--no-defer", "--planner", "fd"])
     config = {"defer": True, "planner": "fd:opt", "time_limit": 120, "level": 3}
@@ -96,7 +96,7 @@ def test_max_level_flag_wins_over_example_level(capsys):
 
 
 def test_level_flag_above_example_max_level_raises_it():
-    from ssr_compile.cli_solve import resolve_settings
+    from ssr_compile.cli.solve import resolve_settings
 
     ns = build_parser().parse_args(["solve", "x", "--level", "5"])
     got = resolve_settings(ns, {"max_level": 4})
@@ -258,7 +258,7 @@ def test_quiet_import_keeps_output_working(tmp_path):
 
 
 def test_resample_is_a_setting_with_the_solvers_default(capsys):
-    from ssr_compile.cli_solve import DEFAULTS
+    from ssr_compile.cli.solve import DEFAULTS
     from ssr_compile.solver import RESAMPLE
 
     assert DEFAULTS["resample"] == RESAMPLE

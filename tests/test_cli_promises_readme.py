@@ -105,8 +105,8 @@ def test_every_path_the_readme_names_exists():
 
 
 def test_default_planner_table_matches_the_code():
-    from ssr_compile.cli_compile import DEFAULT_PLANNER
-    from ssr_compile.cli_solve import DEFAULTS
+    from ssr_compile.cli.compile import DEFAULT_PLANNER
+    from ssr_compile.cli.solve import DEFAULTS
 
     text = _flat(README)
     assert f"`solve` uses `{DEFAULTS['planner']}`" in text

@@ -19,7 +19,7 @@ FIXTURE = Path(__file__).resolve().parent / "fixtures" / "experiment" / "misbeha
 
 
 def run_cli(argv: list[str]) -> int:
-    import ssr_compile.cli_experiment  # noqa: F401 - registers the commands
+    import ssr_compile.cli.experiment  # noqa: F401 - registers the commands
 
     try:
         return main(argv)

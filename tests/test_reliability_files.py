@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from ssr_compile import cli
-from ssr_compile.cli import main, write_atomically, write_files_atomically
+from ssr_compile import files as cli
+from ssr_compile.cli import main
 from ssr_compile.errors import SSRError
+from ssr_compile.files import write_atomically, write_files_atomically
 
 LANG = Path(__file__).parent / "fixtures" / "lang"
 PP = Path(__file__).parent / "fixtures" / "compile" / "pp1d"

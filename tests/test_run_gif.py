@@ -10,7 +10,7 @@ from PIL import Image
 from ssr_compile.streams import kitchen_gif
 
 from ssr_compile.cli import main
-from ssr_compile.cli_run import _write_gif
+from ssr_compile.cli.run import _write_gif
 
 
 def test_a_kitchen_frame_shows_the_camera_view_the_particles_and_the_caption():

@@ -240,7 +240,7 @@ def write_report(
     variant and seed wins -- are written to ``out_dir/episodes.jsonl`` first, so that the
     merged folder is a report of its own; the commands recorded in the sources' tables are
     kept in the new one."""
-    from ..cli import write_atomically
+    from ..files import write_atomically
 
     out = Path(out_dir)
     if sources:

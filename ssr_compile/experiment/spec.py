@@ -74,10 +74,10 @@ def kitchen_has_environment() -> bool:
     """Whether the kitchen example names a closed-loop environment (then Table I's tasks are
     the default of ``--tasks``)."""
     try:
-        from ..examples import read_config, resolve_folder
+        from ..examples import read_settings, resolve_folder
 
         folder = resolve_folder("kitchen")
-        return folder is not None and bool(read_config(folder).get("environment"))
+        return folder is not None and bool(read_settings(folder).environment)
     except SSRError:
         return False
 

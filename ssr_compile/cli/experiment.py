@@ -7,8 +7,8 @@ import math
 import shlex
 import sys
 
-from .cli import register
-from .errors import SSRError
+from ..errors import SSRError
+from .registry import register
 
 
 def _seconds(text: str) -> float:
@@ -37,7 +37,7 @@ def _whole(least: int):
 
 
 def _configure_experiment(p: argparse.ArgumentParser) -> None:
-    from .experiment import KITCHEN_TASKS, VARIANTS
+    from ..experiment import KITCHEN_TASKS, VARIANTS
 
     p.description = (
         "Run Table I of the paper (§VIII): the online policy on every task × variant × seed, "
@@ -127,8 +127,8 @@ def _configure_experiment(p: argparse.ArgumentParser) -> None:
 
 
 def run_experiment(args: argparse.Namespace) -> int:
-    from . import experiment as X
-    from .planners import get_planner
+    from .. import experiment as X
+    from ..planners import get_planner
 
     if args.tasks is None:
         if not X.kitchen_has_environment():
@@ -227,7 +227,7 @@ def _configure_report(p: argparse.ArgumentParser) -> None:
 
 
 def run_report(args: argparse.Namespace) -> int:
-    from .experiment import write_report
+    from ..experiment import write_report
 
     if len(args.dirs) > 1 and args.output is None:
         print(

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import tempfile
 from pathlib import Path
 
-from ssr_compile.catalog import TASKS
-
-from .cli import register
-from .errors import SSRError
+from ..catalog import TASKS
+from ..errors import SSRError
+from ..files import write_atomically
+from .registry import register
 
 
 def _task_args(p: argparse.ArgumentParser) -> None:
@@ -30,14 +29,7 @@ def _write_png(output: str, draw) -> str:
     out = Path(output)
     if out.suffix.lower() != ".png":
         raise SSRError(f"the output must be a .png file, got '{output}'")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=out.parent, suffix=".png")
-    os.close(fd)
-    try:
-        draw(tmp)
-        os.replace(tmp, out)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+    write_atomically(out, draw)
     return str(out)
 
 

@@ -8,11 +8,11 @@ import math
 import sys
 from pathlib import Path
 
-from ssr_compile.catalog import TASKS as KITCHEN_TASKS
-
-from .cli import register
-from .errors import SSRError
-from .json_output import SCHEMA_VERSION
+from ..catalog import TASKS as KITCHEN_TASKS
+from ..errors import SSRError
+from ..files import write_atomically
+from ..json_output import SCHEMA_VERSION
+from .registry import register
 
 
 def _positive(text: str) -> float:
@@ -102,7 +102,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
 
 def resolve(target: str, problem: str | None):
     """(example, problem) for a kitchen task name, a shipped example or a folder."""
-    from .examples import load_example
+    from ..examples import load_example
 
     if target.lower() in KITCHEN_TASKS:
         if problem and problem.lower() != target.lower():
@@ -112,7 +112,7 @@ def resolve(target: str, problem: str | None):
 
 
 def run(args: argparse.Namespace) -> int:
-    from .policy import PolicySettings, run_policy
+    from ..policy import PolicySettings, run_policy
 
     if args.max_cycles < 1:
         raise SSRError("--max-cycles must be at least 1")
@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         planner=args.planner,
         **({} if args.resample is None else {"resample": args.resample}),
     )
-    from .planners import get_planner
+    from ..planners import get_planner
 
     get_planner(args.planner)  # bad input before anything runs
     log_file = None
@@ -209,23 +209,16 @@ def run(args: argparse.Namespace) -> int:
 
 def _write_gif(path: Path, frames: list) -> None:
     """An animated GIF of the frames (1.2 s each, the last held 3 s), written atomically."""
-    import os
-    import tempfile
-
     from PIL import Image
 
     images = [Image.fromarray(f) for f in frames]
     durations = [1200] * (len(images) - 1) + [3000]
-    fd, tmp = tempfile.mkstemp(prefix=".ssr-gif-", suffix=".gif", dir=path.parent)
-    os.close(fd)
-    try:
-        images[0].save(
+    write_atomically(
+        path,
+        lambda tmp: images[0].save(
             tmp, save_all=True, append_images=images[1:], duration=durations, loop=0
-        )
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        ),
+    )
     print(f"wrote {path} ({len(images)} frames)")
 
 

@@ -8,11 +8,14 @@ import sys
 import time
 from pathlib import Path
 
-from . import cli
-from . import syntax as S
-from .cli import load_files, register, write_files_atomically
-from .errors import PlannerFailure, SSRError
-from .json_output import document, dumps
+from .. import limits
+from .. import syntax as S
+from ..errors import PlannerFailure, SSRError
+from ..files import write_files_atomically
+from ..inputs import load_inputs
+from ..json_output import document, dumps
+from . import options
+from .registry import register
 
 
 def _add_inputs(p: argparse.ArgumentParser, problem_optional: bool, level_help: str) -> None:
@@ -30,7 +33,7 @@ def _add_inputs(p: argparse.ArgumentParser, problem_optional: bool, level_help: 
         metavar="NAME",
         help="with an example: which of its problems (e.g. stow for problem-stow.pddl)",
     )
-    p.add_argument("--level", type=cli.level, default=3, metavar="N", help=level_help)
+    p.add_argument("--level", type=options.level, default=3, metavar="N", help=level_help)
     p.set_defaults(problem_optional=problem_optional)
 
 
@@ -38,7 +41,7 @@ def resolve_inputs(args: argparse.Namespace) -> None:
     """DOMAIN STREAM [PROBLEM], or an example's name/folder (its files, and its problem chosen
     by --problem): set args.domain, args.stream, args.problem to file paths."""
     if args.stream is None:
-        from .cli_solve import resolve_folder
+        from ..examples import example_files, resolve_folder
 
         folder = resolve_folder(args.domain)
         if folder is None:
@@ -47,7 +50,7 @@ def resolve_inputs(args: argparse.Namespace) -> None:
                 "DOMAIN STREAM" + (" [PROBLEM]" if args.problem_optional else " PROBLEM"),
                 file=args.domain,
             )
-        problems = cli.example_files(folder)[2:]
+        problems = example_files(folder)[2:]
         if args.problem_name:
             names = [
                 args.problem_name,
@@ -84,49 +87,10 @@ def _short(path: Path) -> str:
     return path.stem.removeprefix("problem-") if path.stem != "problem" else "problem"
 
 
-def load_inputs(args, warnings: list[str]):
-    """Parse and check DOMAIN STREAM [PROBLEM]; raises the first error."""
-    from .check import check_domain, check_problem, check_streams
-
-    paths = [args.domain, args.stream] + ([args.problem] if getattr(args, "problem", None) else [])
-    loaded = load_files(paths, warnings)
-    (dp, dsrc, domain), (sp, ssrc, streams) = loaded[0], loaded[1]
-    for path, node, want in ((dp, domain, S.Domain), (sp, streams, S.StreamFile)):
-        if not isinstance(node, want):
-            raise SSRError(
-                f"expected a {want.kind} file, found a {node.kind} file", file=path, line=1, col=1
-            )
-    reports = [
-        check_domain(domain, streams=streams, filename=dp, source=dsrc),
-        check_streams(streams, domain, filename=sp, source=ssrc),
-    ]
-    problem = None
-    if len(loaded) > 2:
-        pp, psrc, problem = loaded[2]
-        if not isinstance(problem, S.Problem):
-            raise SSRError(
-                f"expected a problem file, found a {problem.kind} file", file=pp, line=1, col=1
-            )
-        reports.append(check_problem(problem, domain, streams=streams, filename=pp, source=psrc))
-    for r in reports:
-        r.raise_first()
-        warnings.extend(r.warnings)
-    # Stream constructs the compiler refuses are reported against the stream file (the
-    # compiler passes only know line and column, and would be attributed to the domain).
-    from .compile.instantiate import refuse_unsupported
-
-    try:
-        refuse_unsupported(streams)
-    except SSRError as e:
-        e.file, e.source = sp, ssrc
-        raise
-    return domain, streams, problem
-
-
 def attach_domain_file(e: SSRError, domain_path: str) -> SSRError:
     """Errors of the compiler passes point into the domain: name the file and show the line."""
     if e.file is None and e.line is not None:
-        from .parse import read_source
+        from ..parse import read_source
 
         e.file = domain_path
         try:
@@ -137,11 +101,11 @@ def attach_domain_file(e: SSRError, domain_path: str) -> SSRError:
 
 
 def _caps_for(spec: str | None):
-    from .compile.capabilities import Capabilities
+    from ..compile.capabilities import Capabilities
 
     if not spec:
         return Capabilities()
-    from .planners import get_planner
+    from ..planners import get_planner
 
     return get_planner(spec).capabilities
 
@@ -186,12 +150,12 @@ def run_compile(args: argparse.Namespace) -> int:
 
 
 def _run_compile(args: argparse.Namespace) -> int:
-    from .compile.lower import lower
-    from .compile.pipeline import compile_problem, declare_stream_predicates
-    from .printer import to_text
+    from ..compile.lower import lower
+    from ..compile.pipeline import compile_problem, declare_stream_predicates
+    from ..printer import to_text
 
     warnings: list[str] = []
-    domain, streams, problem = load_inputs(args, warnings)
+    domain, streams, problem = load_inputs(args.domain, args.stream, args.problem, warnings)
     caps = _caps_for(args.backend)
     out = Path(args.output)
     files: dict[str, str] = {}
@@ -268,7 +232,7 @@ def _configure_plan(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--max-level",
-        type=cli.level,
+        type=options.level,
         metavar="N",
         help="the last level tried (default 8, or --level when it is higher)",
     )
@@ -280,7 +244,7 @@ def _configure_plan(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--time-limit",
-        type=cli.seconds,
+        type=options.seconds,
         default=60.0,
         metavar="S",
         help="time limit in seconds for the whole command: reading, compiling, planning "
@@ -312,11 +276,11 @@ def run_plan(args: argparse.Namespace) -> int:
 
 
 def _run_plan(args: argparse.Namespace) -> int:
-    from .compile.pipeline import compile_problem
-    from .errors import TimeLimitReached
-    from .planners import get_planner
-    from .planners.base import TIMEOUT, UNSOLVABLE, PlanResult
-    from .solver.preimage import plan_preimage, stream_plan
+    from ..compile.pipeline import compile_problem
+    from ..errors import TimeLimitReached
+    from ..planners import get_planner
+    from ..planners.base import TIMEOUT, UNSOLVABLE, PlanResult
+    from ..solver.preimage import plan_preimage, stream_plan
 
     warnings: list[str] = []
     start = time.monotonic()
@@ -326,8 +290,8 @@ def _run_plan(args: argparse.Namespace) -> int:
     # The limit bounds the whole command; the planner gets what is left of it and stops on its
     # own, the alarm (a little later) stops reading and compiling.
     try:
-        with cli.time_limit(args.time_limit + _GRACE):
-            domain, streams, problem = load_inputs(args, warnings)
+        with limits.time_limit(args.time_limit + _GRACE):
+            domain, streams, problem = load_inputs(args.domain, args.stream, args.problem, warnings)
             backend = get_planner(args.planner)
             while True:
                 phase = "compiling"
@@ -428,7 +392,7 @@ def _configure_planners(p: argparse.ArgumentParser) -> None:
 
 
 def run_planners(args: argparse.Namespace) -> int:
-    from .planners import describe_planners
+    from ..planners import describe_planners
 
     rows = describe_planners()
     if args.json:

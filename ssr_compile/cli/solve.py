@@ -7,18 +7,17 @@ import math
 import re
 import sys
 import time
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
-from . import cli
-from .cli import register
-from .errors import SSRError, TimeLimitReached
-from .json_output import document, dumps, to_json
-
-try:  # Python 3.11+
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
-
+from .. import limits
+from ..errors import SSRError, TimeLimitReached
+from ..examples import SETTINGS_FILE, ExampleSettings, read_settings, resolve_folder
+from ..inputs import load_inputs
+from ..json_output import document, dumps, to_json
+from . import options
+from .registry import register
 
 _DEFAULTS_NOTE = (
     "With an example FOLDER, the settings in its example.toml (planner, time_limit, level, "
@@ -58,26 +57,26 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--time-limit",
-        type=cli.seconds,
+        type=options.seconds,
         metavar="S",
         help="time limit in seconds for each problem (default 60, or example.toml's)",
     )
     p.add_argument(
         "--max-cost",
-        type=cli.cost_bound,
+        type=options.cost_bound,
         metavar="C",
         help="only accept plans cheaper than C, in the problem's cost units (the paper's c*; "
         "default: no bound)",
     )
     p.add_argument(
         "--level",
-        type=cli.level,
+        type=options.level,
         metavar="N",
         help="first instantiation level (default 1, or example.toml's)",
     )
     p.add_argument(
         "--max-level",
-        type=cli.level,
+        type=options.level,
         metavar="N",
         help="give up above this level (default 8, or example.toml's)",
     )
@@ -107,7 +106,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--seed",
-        type=cli.seed,
+        type=options.seed,
         metavar="N",
         help="seed for the streams module's random numbers (default 0)",
     )
@@ -165,7 +164,7 @@ def _check_bool(text: str) -> bool:
 
 
 def _check_algorithm(text: str) -> str:
-    from .solver import ALGORITHMS
+    from ..solver import ALGORITHMS
 
     if text not in ALGORITHMS:
         raise argparse.ArgumentTypeError(
@@ -175,7 +174,7 @@ def _check_algorithm(text: str) -> str:
 
 
 def _check_resample(text: str) -> int:
-    return cli.count(text, 0, what="a number of draws")
+    return options.count(text, 0, what="a number of draws")
 
 
 def _check_name(text: str) -> str:
@@ -186,32 +185,39 @@ def _check_name(text: str) -> str:
 
 _CHECKS = {
     "planner": _check_name,
-    "time_limit": cli.seconds,
-    "level": cli.level,
-    "max_level": cli.level,
-    "max_cost": cli.cost_bound,
+    "time_limit": options.seconds,
+    "level": options.level,
+    "max_level": options.level,
+    "max_cost": options.cost_bound,
     "defer": _check_bool,
     "algorithm": _check_algorithm,
     "resample": _check_resample,
-    "seed": cli.seed,
+    "seed": options.seed,
 }
 
 
-def resolve_settings(args: argparse.Namespace, config: dict, config_file: str = "example.toml"):
+def resolve_settings(
+    args: argparse.Namespace, example: ExampleSettings | Mapping[str, Any]
+) -> dict[str, tuple[Any, str]]:
     """{name: (value, source)}: each setting from its flag, else example.toml, else the default.
 
+    ``example``: the example's settings (a table as example.toml holds it is read as one).
     A flag always wins: a level from example.toml above a --max-level given on the command line
     is lowered to it (and a --level above example.toml's max_level raises that)."""
+    if not isinstance(example, ExampleSettings):
+        example = ExampleSettings.from_table(example)
+    config_file = str(example.file) if example.file else SETTINGS_FILE
     out: dict[str, tuple] = {}
     for name, default in DEFAULTS.items():
         value = getattr(args, name, None)
         if value is not None:
             out[name] = (value, "flag " + _FLAGS[name])
-        elif name in config:
+        elif name in example.solver:
+            written = example.solver[name]
             try:  # example.toml's values pass the same validation as the options
-                out[name] = (_CHECKS[name](str(config[name])), "example.toml")
+                out[name] = (_CHECKS[name](str(written)), example.source(name))
             except argparse.ArgumentTypeError as e:
-                raise SSRError(f"{name} = {config[name]!r}: {e}", file=config_file) from None
+                raise SSRError(f"{name} = {written!r}: {e}", file=config_file) from None
         else:
             out[name] = (default, "default")
     (level, lsrc), (top, tsrc) = out["level"], out["max_level"]
@@ -221,7 +227,7 @@ def resolve_settings(args: argparse.Namespace, config: dict, config_file: str = 
         elif lsrc.startswith("flag") and not tsrc.startswith("flag"):
             out["max_level"] = (level, f"{tsrc}, raised to --level")
         else:
-            where = "example.toml" if lsrc == tsrc == "example.toml" else None
+            where = SETTINGS_FILE if lsrc == tsrc == SETTINGS_FILE else None
             raise SSRError(
                 f"the first level ({level}, {lsrc}) is above the last ({top}, {tsrc})",
                 file=where and config_file,
@@ -248,38 +254,16 @@ def describe_settings(settings: dict) -> str:
     )
 
 
-def _folder_config(folder: Path) -> dict:
-    config_file = folder / "example.toml"
-    if not config_file.exists():
-        raise SSRError(
-            f'no example.toml in {folder} (it names the streams module: streams = "ssr_compile.streams.x")',
-            file=str(folder),
-        )
-    try:
-        return tomllib.loads(config_file.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as e:
-        raise SSRError(f"not valid TOML: {e}", file=str(config_file)) from None
-
-
-def resolve_folder(name: str) -> Path | None:
-    path = Path(name)
-    if path.is_dir():
-        return path
-    from .resources import domains_dir
-
-    shipped = domains_dir() / name
-    return shipped if shipped.is_dir() else None
-
-
-def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], dict]:
-    """(domain, stream, problem) triples to solve, and the folder's settings."""
+def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], ExampleSettings]:
+    """(domain, stream, problem) triples to solve, and the folder's settings (none without
+    a folder)."""
     if len(args.inputs) == 1:
         folder = resolve_folder(args.inputs[0])
         if folder is None:
             raise SSRError(
                 f"'{args.inputs[0]}' is neither a folder nor a shipped example", file=args.inputs[0]
             )
-        config = _folder_config(folder)
+        example = read_settings(folder)
         if args.problem:
             candidates = [
                 folder / args.problem,
@@ -290,13 +274,13 @@ def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], dict]:
             if problem is None:
                 raise SSRError(f"no problem '{args.problem}' in {folder}", file=str(folder))
             problems = [problem]
-        elif "problems" in config:
-            problems = [folder / p for p in config["problems"]]
+        elif example.problems is not None:
+            problems = [folder / p for p in example.problems]
         else:
             problems = sorted(p for p in folder.glob("problem*.pddl"))
         if not problems:
             raise SSRError(f"no problem files in {folder}", file=str(folder))
-        return [(folder / "domain.pddl", folder / "stream.pddl", p) for p in problems], config
+        return [(folder / "domain.pddl", folder / "stream.pddl", p) for p in problems], example
     if len(args.inputs) != 3:
         raise SSRError("expected DOMAIN STREAM PROBLEM, or a single example FOLDER")
     if not args.streams:
@@ -304,22 +288,20 @@ def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], dict]:
             "--streams MODULE is required with DOMAIN STREAM PROBLEM (it implements the streams)"
         )
     domain, stream, problem = (Path(x) for x in args.inputs)
-    return [(domain, stream, problem)], {}
+    return [(domain, stream, problem)], ExampleSettings()
 
 
 def run(args: argparse.Namespace) -> int:
-    from .cli_compile import load_inputs
-    from .solver import SolveOptions, print_solution, solve
-    from .stream import module_for_problem
+    from ..solver import SolveOptions, print_solution, solve
+    from ..stream import module_for_problem
 
     if args.full and not args.json:
         raise SSRError("--full goes with --json (it prints every value in full)")
-    jobs, config = jobs_from_args(args)
-    module_spec = args.streams or config.get("streams")
+    jobs, example = jobs_from_args(args)
+    module_spec = args.streams or example.streams
     if not module_spec:
         raise SSRError('example.toml does not name a streams module (streams = "...")')
-    config_file = str(jobs[0][0].parent / "example.toml") if config else "example.toml"
-    settings = resolve_settings(args, config, config_file)
+    settings = resolve_settings(args, example)
     if args.verbose:
         print("settings in force:", file=sys.stderr)
         print(describe_settings(settings), file=sys.stderr)
@@ -334,16 +316,15 @@ def run(args: argparse.Namespace) -> int:
     status = 0
     for domain_path, stream_path, problem_path in jobs:
         warnings: list[str] = []
-        ns = argparse.Namespace(
-            domain=str(domain_path), stream=str(stream_path), problem=str(problem_path)
-        )
         start = time.monotonic()
         # The limit covers the whole problem: reading, the streams module, solving.  The solver
         # stops itself at its deadline; the alarm (a little later) stops whatever it is stuck
         # in, such as a stream that never returns.
         try:
-            with cli.time_limit(time_limit + _GRACE):
-                domain, streams, problem = load_inputs(ns, warnings)
+            with limits.time_limit(time_limit + _GRACE):
+                domain, streams, problem = load_inputs(
+                    str(domain_path), str(stream_path), str(problem_path), warnings
+                )
                 module = module_for_problem(module_spec, problem_path, seed)
                 module.check_against(streams, str(stream_path))
                 progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
@@ -407,7 +388,7 @@ _GRACE = 1.0
 
 def _where(e: BaseException) -> str:
     """Which stream was running when the time limit passed, as a phrase for the message."""
-    from .limits import overrunning_stream
+    from ..limits import overrunning_stream
 
     name = overrunning_stream(e)
     return f" while stream '{name}' was running (it overran the limit)" if name else ""
