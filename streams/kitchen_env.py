@@ -55,7 +55,8 @@ from ssr_compile.policy import Episode
 from ssr_compile.resources import domains_dir
 from ssr_compile.stream import StreamsModule
 
-from .kitchen_module import MODEL, STREAM_INFO, KitchenModule, to_action
+from .kitchen_belief import MODEL
+from .kitchen_module import STREAM_INFO, KitchenModule, to_action
 
 PLACED_STD = (0.01, 0.01, 0.0, math.radians(3.0))  # belief of an object just placed
 PLACED_PARTICLES = 100

@@ -389,7 +389,7 @@ def test_an_arm_motion_the_world_stopped_is_not_planned_again():
 
     from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.streams.kitchen_env import make_episode
-    from ssr_compile.streams.kitchen_module import BLOCKED
+    from ssr_compile.streams.kitchen_motion import BLOCKED
 
     episode = make_episode("cook", 0)
     try:
