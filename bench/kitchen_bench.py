@@ -19,7 +19,7 @@ import sys
 import time
 
 from ssr_compile.sim.tasks import TASKS
-from ssr_compile.streams.kitchen_env import make_episode
+from ssr_compile.streams.environments.kitchen import make_episode
 
 from ssr_compile.policy import VARIANTS, PolicySettings, run_policy
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import inspect
 
-from ssr_compile.streams import progress
+from ssr_compile.streams.environments import progress
 
 from ssr_compile import focused, policy
 from ssr_compile.focused import ReplanState, solve, with_kept
