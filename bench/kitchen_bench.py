@@ -19,7 +19,7 @@ import sys
 import time
 from dataclasses import replace
 
-from ssr_compile.streams.kitchen_env import make_episode
+from ssr_compile.streams.environments.kitchen import make_episode
 
 from ssr_compile.catalog import TASKS, VARIANTS
 from ssr_compile.policy import PolicySettings, run_policy

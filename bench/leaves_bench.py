@@ -17,7 +17,7 @@ import time
 
 
 def first_plan(task: str, seed: int, leaves: bool) -> dict:
-    from ssr_compile.streams.kitchen_env import make_episode
+    from ssr_compile.streams.environments.kitchen import make_episode
 
     from ssr_compile.solver import SolveOptions, solve
 

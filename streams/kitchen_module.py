@@ -26,80 +26,34 @@ from contextlib import contextmanager
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from ssr_compile.sim.geometry import (
-    bases_near,
     invert,
     multiply,
     pose,
     quat_from_yaw,
     wrap_angle,
 )
-from ssr_compile.sim.problem import canonical_surface, is_localized
+from ssr_compile.sim.problem import canonical_surface
 from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
 from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
-from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, Held, World
+from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
 
-from ssr_compile.belief.observation import (
-    BeliefParameters,
-    Observation,
-    obs_cost,
-    sample_obs,
-    update_belief,
-    visibility_lower_bound,
-    visibility_mask,
-)
 from ssr_compile.belief.particles import PoseBelief
 from ssr_compile.stream import StreamInfo, StreamsModule
 
-BELIEF = BeliefParameters()  # paper §V: eps, delta, c, c', p_FN and noise (the library's)
-MODEL, EPS, DELTA = BELIEF.model, BELIEF.eps, BELIEF.delta
-C_DETECT, C_RECOVER = BELIEF.c_detect, BELIEF.c_recover  # c: one detection; c': a failed one
+from .kitchen_belief import C_DETECT, BeliefStreams
+from .kitchen_motion import ArmConf, MotionStreams
+
 # A placement this close (m, rad) to one the true world refused is not proposed again.
 REFUSED_NEAR = (0.02, 0.2)
-# Radians (max over the joints) around an arm configuration that collided in the true world
-# within which arm motions at that base are refused (:meth:`KitchenModule.blocked`).
-BLOCKED = 0.3
-# (m, rad): bases this close share what the true world refused there.
-SAME_BASE = (0.03, 0.05)
-RETRIES = 3  # random IK restarts may miss: a function stream tries this often before failing
-MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
-FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
 MIN_SIDE_GRASP_HALF_HEIGHT = 0.04  # m: a side grasp of a shorter object hits its support
 PLACE_HERE_REACH = 0.85  # m from the arm's mount: placements sampled from where the robot is
 SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
-LOOKAHEAD = 8  # regions sample-obs draws ahead looking for one in view, or one hidden
 
 
-class ArmConf(tuple):
-    """An arm configuration computed by a stream, equal only to itself.
-
-    Two streams may compute the same joint values (the pre-pose at an open drawer's handle
-    ends a pull and starts a push); as plain tuples they would share one object name, and the
-    next plan's structure (Algorithm 2) would then demand that two *different* streams return
-    one value again -- which no optimistic plan can promise."""
-
-    __slots__ = ()
-
-    def __eq__(self, other: object) -> bool:
-        return self is other
-
-    def __ne__(self, other: object) -> bool:
-        return self is not other
-
-    def __hash__(self) -> int:
-        return id(self)
-
-
-def _conf_key(q) -> tuple:
-    return tuple(np.round(np.asarray(q, float), 6))
-
-
-def _same(q1, q2, tol: float = 1e-6) -> bool:
-    return len(q1) == len(q2) and float(np.max(np.abs(np.subtract(q1, q2)))) <= tol
-
-
-class KitchenModule:
-    """Stream callables over one task's world."""
+class KitchenModule(MotionStreams, BeliefStreams):
+    """Stream callables over one task's world (the motion and belief streams in
+    :mod:`.kitchen_motion` and :mod:`.kitchen_belief`)."""
 
     def __init__(self, task: Task, rng: np.random.Generator) -> None:
         self.task = task
@@ -360,267 +314,6 @@ class KitchenModule:
                 if abs(wrap_angle(float(est[3] - est2[3]))) < REFUSED_NEAR[1]:
                     return True
         return False
-
-    def plan_base_motion(self, q1, q2):
-        with self.planning():
-            return self.ks.plan_base_motion(q1, q2)
-
-    def _note_reach(self, q, openings) -> None:
-        self._reach_openings[_conf_key(q)] = dict(openings)
-
-    def _openings_at(self, q1, q2) -> dict[str, float] | None:
-        """The drawer openings while the arm moves between ``q1`` and ``q2``: those the reach
-        end was computed under -- a pull's approach with its drawer closed and the others
-        closed, as pull requires; a pick in a drawer with that drawer open.  No drawer moves
-        during an arm motion, so they hold for the whole motion, whenever the plan takes it.
-        ``None`` (the openings the robot saw) for a reach the streams did not compute (the arm
-        where it stopped) or one any openings allow (a pick on the counter)."""
-        for q in (q2, q1):
-            found = self._reach_openings.get(_conf_key(q))
-            if found is not None:
-                return found
-        return None
-
-    def plan_arm_motion(self, bq, q1, q2):
-        """An arm motion that also avoids the objects the robot has localized where it believes
-        they are (:attr:`obstacles`): the arm leaving an object it just placed must not sweep
-        through it, which the true world refuses (and a replan would try the same path again).
-        Drawers are where they will be when the motion is taken (:meth:`_openings_at`), not
-        where the robot saw them: Swap without deferral opened the bottom drawer, and every
-        motion to its approach for pulling it open again later (after closing it), checked with
-        the hand inside the open drawer, failed level after level until the instance cap."""
-        openings = self._openings_at(q1, q2)
-        with self.planning() as w:
-            for d, q in (openings or {}).items():
-                w.set_drawer(d, q)
-            self._place_obstacles(w)
-            # A motion is certified both ways (see :func:`to_action`), so one that ends where
-            # the arm is now may be executed next, reversed: it is planned from here.
-            now = self.arm_now
-            reverse = now is not None and not _same(q1, now) and _same(q2, now)
-            if self.holding is not None and now is not None and (_same(q1, now) or reverse):
-                # The motion the robot may execute next carries what it holds: checked with
-                # it (an arm motion with the cracker box in hand failed in the true world, and
-                # the replan chose the same motion again, Cook seed 1; Stow seeds 5 and 9 took
-                # a motion planned with the hand empty towards the pick, reversed, 90 times).
-                o, g = self.holding
-                w.held = Held(o, g.pose)
-                # ... unless its far end cannot be reached with the object in hand: then the
-                # plan takes it after putting the object down, from a named configuration
-                # the arm happens to be in now (carry).  Stow without deferral held the sugar
-                # box at carry, and every motion from carry to a grasp of the block, checked
-                # with the box in hand, failed, until no plan was left (6 of 12 episodes).
-                w.set_base(bq)
-                w.set_arm(q1 if reverse else q2)
-                if w.robot_collision():
-                    w.held = None
-            # RRT-Connect may miss a path that exists; a function fails for the whole solve,
-            # and with the arm where it is, no other motion may be left (Cook seed 3 ended
-            # "no relaxed solution" on one miss, with a path there on the next try).
-            blocked = self.blocked(bq)
-            for _ in range(RETRIES):
-                if reverse:
-                    out = self.ks.plan_arm_motion(bq, q2, q1, blocked)
-                    path = None if out is None else (tuple(out[0][::-1]),)
-                else:
-                    path = self.ks.plan_arm_motion(bq, q1, q2, blocked)
-                if path is not None:
-                    return path
-            return None
-
-    def blocked(self, bq):
-        """Configurations the true world refused at (or near) base ``bq``, as a test for arm
-        motions: within :data:`BLOCKED` of a configuration that collided, on its side of the
-        halfway point from where the arm stopped (the arm may still leave that point).  The
-        planning world did not know what the arm hit -- an estimate a little off, or an object
-        not yet localized -- and the motion stream, asked again, planned through it again
-        (Cook seed 5 executed one carry motion 90 times)."""
-        near = [
-            (np.asarray(stop, float), np.asarray(hit, float))
-            for b, stop, hit in self.collided
-            if bases_near(b, bq, SAME_BASE)
-        ]
-        if not near:
-            return None
-
-        def test(q: np.ndarray) -> bool:
-            for stop, hit in near:
-                to_hit = float(np.max(np.abs(q - hit)))
-                if to_hit <= BLOCKED and to_hit <= float(np.max(np.abs(q - stop))):
-                    return True
-            return False
-
-        return test
-
-    def sample_drawer_base(self, d: str):
-        return self._each(lambda: self.ks.sample_drawer_base(d), moving=d)
-
-    def _drawer_motion(self, d: str, a1, a2, bq, start=None):
-        key = (d, a1[1], a2[1], tuple(bq), tuple(sorted(self.drawers.items())))
-        if start is not None:
-            # The arm is where an earlier plan put it for this very motion: that motion.
-            for k, m in self._drawer_motions:
-                if k == key and self._snap(m.arm_path, start) is not None:
-                    return DrawerMotion(d, self._snap(m.arm_path, start), m.drawer_path)
-        with self.planning(moving=d):
-            self.world.set_drawer(d, a1[1])
-            if not self._reachable(bq, self.world.handle_pose(d)):
-                return None
-            for _ in range(RETRIES):
-                m = self.ks.plan_drawer(d, a1[1], a2[1], bq, seed=start)
-                path = self._snap(None if m is None else m.arm_path, start)
-                if path is not None:
-                    self._note_reach(path[0], {**self.world.drawer_q, d: a1[1]})
-                    self._note_reach(path[-1], {**self.world.drawer_q, d: a2[1]})
-                    motion = DrawerMotion(d, tuple(path), m.drawer_path)
-                    self._drawer_motions.append((key, motion))
-                    return motion
-        return None
-
-    def _plan_drawer(self, d: str, a1, a2, bq):
-        m = self._drawer_motion(d, a1, a2, bq)
-        return None if m is None else (ArmConf(m.arm_path[0]), ArmConf(m.arm_path[-1]), m)
-
-    def _plan_drawer_from(self, d: str, a1, a2, bq, aq):
-        m = self._drawer_motion(d, a1, a2, bq, aq)
-        return None if m is None else (ArmConf(m.arm_path[-1]), m)
-
-    def sample_press_base(self, s: str):
-        return self._each(self.ks.sample_press_base)
-
-    def _press(self, bq, start=None):
-        with self.planning():
-            if not self._reachable(bq, self.world.button_pose()[0]):
-                return None
-            for _ in range(RETRIES):
-                res = self.ks.plan_press(bq, seed=start)
-                path = self._snap(None if res is None else tuple(res[0]), start)
-                if path is not None:
-                    return path
-        return None
-
-    def plan_press(self, bq):
-        path = self._press(bq)
-        return None if path is None else (ArmConf(path[0]), path)
-
-    def plan_press_from(self, bq, aq):
-        path = self._press(bq, aq)
-        return None if path is None else (path,)
-
-    # -- belief streams ----------------------------------------------------------------------
-    def sample_obs(self, o: str, pb: PoseBelief, s: str) -> Iterator[tuple[Observation]]:
-        """Regions X_i of ``pb``'s particles on ``s``, heaviest first (finite: the library's
-        :func:`~ssr_compile.belief.observation.sample_obs`).  Only particles the fixed camera
-        can see at all (the furniture alone, ``s`` open if it is a drawer) count: a region the
-        cabinet always hides would be detected at no real chance.  A region :meth:`obscost`
-        refuses (the detection too unlikely to be an option) is not proposed: the planner
-        counted on it at :data:`C_DETECT`, the cost failed, and the next level drew the next
-        such region -- Swap, having seen the bottom drawer empty, spent a planner call per
-        level (1-3 s each at levels 7-9) on a detection there."""
-        on = (pb.surface_names == s) & (pb.weights > 0)
-        if not on.any():
-            return
-        on &= self._seeable(o, pb, s)
-        regions = (
-            out
-            for out in sample_obs(o, pb, self.rng, delta=DELTA, eps=EPS, heaviest_first=True, among=on)
-            if self.obscost(o, pb, out[0]) is not None
-        )
-        yield from self._clear_first(o, regions)
-
-    def _clear_now(self, o: str, obs: Observation) -> bool:
-        """No localized object, where it stands now, hides region ``obs`` (``test-vis``)."""
-        return all(self.test_vis(o, obs, o2, pb2) for o2, pb2 in sorted(self.obstacles.items()))
-
-    def _clear_first(self, o: str, regions: Iterator[tuple[Observation]]) -> Iterator:
-        """``regions`` (heaviest first), taking turns: the heaviest one the objects standing
-        now leave in view, then the heaviest one they hide, and so on.  Heaviest first alone,
-        a box in front of most of the block's particles made every draw a region behind it:
-        a plan that detects the block where everything stands (a replan keeping the last
-        plan's structure) failed ``test-vis`` once per level -- Cook's constrained attempts
-        climbed levels 7 to 12 and timed out.  The hidden regions still come, one every
-        other draw, for plans that move the box first.  A kind not found among the next
-        :data:`LOOKAHEAD` regions gives its turn to the heaviest one drawn; without localized
-        objects the order is heaviest first, as before."""
-        if not self.obstacles:
-            yield from regions
-            return
-        regions = iter(regions)
-        ahead: list[tuple[bool, tuple]] = []  # drawn, not yet given: (clear now?, region)
-        want, more = True, True
-        while True:
-            while more and len(ahead) < LOOKAHEAD and all(c != want for c, _ in ahead):
-                out = next(regions, None)
-                more = out is not None
-                if more:
-                    ahead.append((self._clear_now(o, out[0]), out))
-            if not ahead:
-                return
-            pick = next((k for k, (c, _) in enumerate(ahead) if c == want), 0)
-            yield ahead.pop(pick)[1]
-            want = not want
-
-    def _seeable(self, o: str, pb: PoseBelief, s: str) -> np.ndarray:
-        key = (pb.digest, s)
-        if key not in self._seeable_cache:
-            with self.planning(s if s in DRAWERS else None):
-                self.world.set_base(FAR_AWAY)
-                mask = visibility_mask(
-                    pb, self.world.camera, self.world.half_extents[o],
-                    ignore=(self.world.objects[o],),
-                )  # fmt: skip
-            self._seeable_cache[key] = mask
-        return self._seeable_cache[key]
-
-    def update_belief(self, o: str, pb1: PoseBelief, obs: Observation, s: str):
-        if not o == pb1.obj == obs.obj:
-            return None
-        post = update_belief(o, pb1, obs, MODEL)
-        return (post,) if is_localized(post, s) else None
-
-    def _visible_despite(self, obs: Observation, body: int, pb: PoseBelief | None) -> bool:
-        he = self.world.half_extents[obs.obj]
-        cam = self.world.camera
-        lb = visibility_lower_bound(obs, body, pb, cam, half_extents=he)
-        return lb >= 1.0 - obs.eps - 1e-12
-
-    def test_vis(self, o: str, obs: Observation, o2: str, pb2: PoseBelief) -> bool:
-        if o == o2 or pb2.obj != o2:
-            return True
-        with self.planning():
-            return self._visible_despite(obs, self.world.objects[o2], pb2)
-
-    def test_vis_robot(self, o: str, obs: Observation, bq) -> bool:
-        with self.planning():
-            self.world.set_base(bq)
-            return self._visible_despite(obs, self.world.robot.body, None)
-
-    def test_cfree(self, o: str, pb: PoseBelief, o2: str, pb2: PoseBelief) -> bool:
-        """Footprint circles of ``o`` (point estimate) and of ``o2``'s particles on the same
-        surface overlap with probability at most EPS."""
-        if o == o2:
-            return True
-        s, x = pb.point_estimate()
-        he1, he2 = self.world.half_extents[o], self.world.half_extents[o2]
-        r = math.hypot(he1[0], he1[1]) + math.hypot(he2[0], he2[1])
-        same = pb2.surface_names == s
-        d = np.linalg.norm(pb2.poses[:, :2] - x[:2], axis=1)
-        return float(pb2.weights[same & (d < r)].sum()) <= EPS
-
-    def test_afree(self, bq, aq, o2: str, pb2: PoseBelief) -> bool:
-        """The robot at base ``bq`` with its arm at ``aq`` is clear of ``o2`` where the belief
-        ``pb2`` puts it (a localized belief, at its estimate; another is no obstacle, as for
-        :meth:`plan_arm_motion`).  The configuration the arm is in now is clear: it is there."""
-        if not is_localized(pb2) or (self.arm_now is not None and _same(aq, self.arm_now)):
-            return True
-        with self.planning():
-            return self.ks.test_cfree_traj_pose(bq, (aq,), o2, self.obj_pose(pb2))
-
-    def obscost(self, o: str, pb: PoseBelief, obs: Observation) -> float | None:
-        if not o == pb.obj == obs.obj:
-            return None
-        cost = obs_cost(obs, pb, self.n_objects, C_DETECT, C_RECOVER, MODEL)
-        return cost if cost <= MAX_OBS_COST else None  # (inf too: no chance at all)
 
     def streams(self) -> dict[str, Callable]:
         return {

@@ -1,4 +1,4 @@
-"""The progress example of paper §VI (``domains/pddl/progress``): streams and a closed loop.
+"""The progress example of paper §VI (``domains/pddl/progress``): its streams.
 
 A mobile robot at ``q0`` must pick object ``d`` two metres away.  Positions are planar
 ``(x, y)`` in metres.  The arm reaches ``d`` from a base pose whose distance to ``d`` lies in
@@ -14,7 +14,7 @@ Streams (``make_module``):
   when it is not (then the generator ends);
 * ``plan-base-motion`` — deferrable (§VII): a straight base trajectory.
 
-The true world (:class:`ProgressWorld`): a base motion lands at the aimed pose plus Gaussian
+The true world (:class:`~ssr_compile.streams.environments.progress.ProgressWorld`): a base motion lands at the aimed pose plus Gaussian
 noise ``BASE_NOISE`` per axis (seeded); the robot then observes where it is (localization).
 A pick succeeds in the true world when the base really is within reach and the pick was planned
 from the pose the robot is at.
@@ -32,11 +32,9 @@ from __future__ import annotations
 import math
 import zlib
 from collections.abc import Iterator
-from dataclasses import dataclass
 
 import numpy as np
 
-from ssr_compile import syntax as S
 from ssr_compile.stream import StreamInfo, StreamsModule
 
 OBJECT = (2.0, 0.0)  # where d stands
@@ -126,111 +124,3 @@ VALUES = _default.values
 def for_problem(path, seed: int) -> StreamsModule:
     """... and the seeded module for `solve --seed N`."""
     return make_module(seed)
-
-
-# ---------------------------------------------------------------- the closed loop
-
-
-class ProgressWorld:
-    """The true world: the robot's real base pose and whether it holds ``d``."""
-
-    def __init__(self, seed: int, noise: float = BASE_NOISE):
-        self.rng = np.random.default_rng([seed, 7])
-        self.noise = noise
-        self.base = Q0
-        self.holding = False
-        self.base_motions = 0
-
-    def observe(self) -> dict:
-        return {"base": self.base, "holding": self.holding, "ok": True}
-
-    def execute(self, step) -> dict:
-        if step.name == "move-base":
-            aim = step.values[2]
-            dx, dy = self.rng.normal(0.0, self.noise, 2)
-            self.base = (round(aim[0] + dx, 4), round(aim[1] + dy, 4))
-            self.base_motions += 1
-            return self.observe()
-        if step.name == "pick":
-            planned_from = step.values[3]
-            ok = (
-                not self.holding
-                and math.dist(planned_from, self.base) < 1e-6
-                and within_reach(self.base, OBJECT)
-            )
-            self.holding = self.holding or ok
-            return {**self.observe(), "ok": ok}
-        return {**self.observe(), "ok": False}
-
-    def goal_holds(self) -> bool:
-        return self.holding
-
-    def close(self) -> None:
-        pass
-
-
-@dataclass
-class ProgressAgent:
-    """What the robot knows: its base pose (it localizes after every motion) and its hand."""
-
-    domain: S.Domain
-    streams: S.StreamFile
-    seed: int
-    base: tuple = Q0
-    holding: bool = False
-    _poses: int = 0
-
-    def update(self, step, observation) -> None:
-        if observation is None:
-            return
-        if observation["base"] != self.base:
-            self._poses += 1
-        self.base = observation["base"]
-        self.holding = observation["holding"]
-
-    def _base_name(self) -> str:
-        return "q0" if self._poses == 0 else f"q-reached-{self._poses}"
-
-    def problem(self) -> tuple[S.Problem, StreamsModule]:
-        q = self._base_name()
-        a = S.Atom
-        init: list = [
-            a("graspable", (S.Const("d"),)),
-            a("pose", (S.Const("d"), S.Const("p-d"))),
-            a("baseconf", (S.Const(q),)),
-            a("atbase", (S.Const(q),)),
-        ]
-        if self.holding:
-            init.append(a("holding", (S.Const("d"),)))
-        else:
-            init += [a("atpose", (S.Const("d"), S.Const("p-d"))), a("handempty")]
-        init.append(S.InitValue(S.FuncTerm("total-cost"), S.Num(0)))
-        problem = S.Problem(
-            "progress-now",
-            "progress",
-            None,
-            tuple(S.Typed(n) for n in ("d", "p-d", q)),
-            tuple(init),
-            a("holding", (S.Const("d"),)),
-            S.Metric("minimize", S.FuncTerm("total-cost")),
-        )
-        return problem, make_module(self.seed, {"p-d": OBJECT, q: self.base})
-
-    def is_constant(self, name: str) -> bool:
-        return name == "d"
-
-    def summary(self) -> str:
-        d = math.dist(self.base, OBJECT)
-        hand = "holding d" if self.holding else "hand empty"
-        return f"base ({self.base[0]:.2f}, {self.base[1]:.2f}), {d:.2f} m from d; {hand}"
-
-
-def make_episode(problem: str | None = None, seed: int = 0, *, noise: float = BASE_NOISE):
-    """The environment and agent of one episode (``example.toml``'s ``environment``)."""
-    from ssr_compile.examples import load_example
-    from ssr_compile.policy import Episode
-
-    ex = load_example("progress")
-    return Episode(
-        ProgressWorld(seed, noise), ProgressAgent(ex.domain, ex.streams, seed), "progress"
-    )

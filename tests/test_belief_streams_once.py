@@ -18,6 +18,7 @@ pytest.importorskip("pybullet")
 from ssr_compile.sim.problem import task_problem  # noqa: E402
 from ssr_compile.sim.tasks import make_task  # noqa: E402
 from ssr_compile.streams import belief_detect as bd  # noqa: E402
+from ssr_compile.streams import kitchen_belief as kb  # noqa: E402
 from ssr_compile.streams import kitchen_module as km  # noqa: E402
 
 
@@ -75,11 +76,11 @@ def test_both_domains_give_the_same_observations_of_the_same_belief(monkeypatch)
 
 
 def test_belief_parameters_live_in_one_dataclass():
-    assert bd.BELIEF == km.BELIEF == DEFAULTS == BeliefParameters()
+    assert bd.BELIEF == kb.BELIEF == DEFAULTS == BeliefParameters()
     assert DEFAULTS.model == ObservationModel(p_fn=0.1)
-    assert (km.MODEL, km.EPS, km.DELTA) == (km.BELIEF.model, km.BELIEF.eps, km.BELIEF.delta)
-    assert (km.C_DETECT, km.C_RECOVER) == (km.BELIEF.c_detect, km.BELIEF.c_recover)
-    for module in (bd, km):
+    assert (kb.MODEL, kb.EPS, kb.DELTA) == (kb.BELIEF.model, kb.BELIEF.eps, kb.BELIEF.delta)
+    assert (kb.C_DETECT, kb.C_RECOVER) == (kb.BELIEF.c_detect, kb.BELIEF.c_recover)
+    for module in (bd, kb, km):
         text = inspect.getsource(module)
         assert "ObservationModel(p_fn" not in text
         assert not any(f"{name} = 0.1" in text for name in ("EPS", "DELTA")), module.__name__

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import inspect
 
-from ssr_compile.streams import progress
+from ssr_compile.streams.environments import progress
 
 from ssr_compile import policy, solver
 from ssr_compile.policy import constant_facts

@@ -1,4 +1,4 @@
-"""The kitchen in closed loop (issue 11): streams/kitchen_env.py's environment and agent under
+"""The kitchen in closed loop (issue 11): streams/environments/kitchen.py's environment and agent under
 the online policy (Algorithm 1), and the faults the issue lists."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import itertools
 import numpy as np
 import pytest
 from ssr_compile.sim.world import DRAWER_TRAVEL
-from ssr_compile.streams.kitchen_env import KitchenObservation, make_episode
+from ssr_compile.streams.environments.kitchen import KitchenObservation, make_episode
 
 from ssr_compile.policy import Agent, Environment, PolicySettings, run_policy
 

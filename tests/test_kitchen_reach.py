@@ -268,7 +268,7 @@ def test_a_placement_the_world_refused_is_not_proposed_again(cook0):
     # configuration lands it at the same pose, and the true world refused it each time.
     from types import SimpleNamespace
 
-    from ssr_compile.streams.kitchen_env import make_episode
+    from ssr_compile.streams.environments.kitchen import make_episode
     from ssr_compile.streams.kitchen_module import REFUSED_NEAR, KitchenModule
 
     from ssr_compile.belief.particles import PoseBelief
@@ -388,8 +388,8 @@ def test_an_arm_motion_the_world_stopped_is_not_planned_again():
     from types import SimpleNamespace
 
     from ssr_compile.sim.robot import ARM_CARRY
-    from ssr_compile.streams.kitchen_env import make_episode
-    from ssr_compile.streams.kitchen_module import BLOCKED
+    from ssr_compile.streams.environments.kitchen import make_episode
+    from ssr_compile.streams.kitchen_motion import BLOCKED
 
     episode = make_episode("cook", 0)
     try:

@@ -99,7 +99,7 @@ def test_the_held_grasp_keeps_the_name_of_the_plan_that_picked_it():
     # after a pick (Stow seed 0 fell back and picked and placed the block four times).
     from types import SimpleNamespace
 
-    from ssr_compile.streams.kitchen_env import make_episode
+    from ssr_compile.streams.environments.kitchen import make_episode
 
     episode = make_episode("stow", 0)
     try:

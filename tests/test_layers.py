@@ -6,41 +6,8 @@ Reads every import statement (in-function imports included) of the checkout's ``
 
 from __future__ import annotations
 
-import ast
-from pathlib import Path
-
 import pytest
-
-ROOT = Path(__file__).resolve().parent.parent
-
-
-def _package_of(path: Path) -> str:
-    rel = path.relative_to(ROOT).with_suffix("")
-    parts = list(rel.parts)
-    if parts[0] in ("sim", "streams"):
-        parts = ["ssr_compile", *parts]
-    return ".".join(parts[:-1])
-
-
-def imported_modules(path: Path) -> list[tuple[int, str]]:
-    tree = ast.parse(path.read_text(), filename=str(path))
-    package = _package_of(path)
-    out = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            out.extend((node.lineno, a.name) for a in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - (node.level - 1)]
-                name = ".".join(base + ([node.module] if node.module else []))
-            else:
-                name = node.module or ""
-            if node.module is None:  # from . import x: each x is a module of that package
-                out.extend((node.lineno, f"{name}.{a.name}") for a in node.names)
-            else:
-                out.append((node.lineno, name))
-    return out
+from importscan import ROOT, imported_modules
 
 
 def _violations(folder: str, forbidden: tuple[str, ...]) -> list[str]:

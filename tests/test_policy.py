@@ -10,7 +10,8 @@ import json
 import re
 
 import pytest
-from ssr_compile.streams import belief_detect, progress
+from ssr_compile.streams import progress as progress_streams
+from ssr_compile.streams.environments import belief_detect, progress
 
 from ssr_compile import syntax as S
 from ssr_compile.cli import main
@@ -162,7 +163,7 @@ def test_constant_facts_keep_only_static_facts_over_constants_and_their_values()
     assert grasps - used, "the example should sample a grasp the plan does not use"
     assert all(f.args[1].name in used for f in facts if f.pred == "grasp")
     assert set(values) <= grasps and values  # the grasps' Python values travel with them
-    assert all(v[0] == "d" and v[1] in progress.GRASPS for v in values.values())
+    assert all(v[0] == "d" and v[1] in progress_streams.GRASPS for v in values.values())
     # s ∪ f_prev: the kept facts and their objects join the next problem
     state = ReplanState([("pick", ("d",))], frozenset(constants), facts, values)
     p2, m2 = with_kept(problem, module, state)

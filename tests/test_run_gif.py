@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
-from ssr_compile.streams import kitchen_gif
+from ssr_compile.streams.environments import kitchen_gif
 
 from ssr_compile.cli import main
 from ssr_compile.cli.run import _write_gif

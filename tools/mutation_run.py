@@ -69,6 +69,8 @@ DEFAULT_FILES = [
     "ssr_compile/belief/determinize.py",
     "sim/perception.py",
     "streams/kitchen_module.py",
+    "streams/kitchen_motion.py",
+    "streams/kitchen_belief.py",
 ]
 
 # Where a target lived before the belief layer became ssr_compile.belief (commit 0caa393): a

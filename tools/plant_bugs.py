@@ -15,12 +15,12 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 MUTANTS = {
     "kitchen: test-vis always true": (
-        "streams/kitchen_module.py",
+        "streams/kitchen_belief.py",
         "            return self._visible_despite(obs, self.world.objects[o2], pb2)\n",
         "            return True\n",
     ),
     "kitchen: test-cfree inverted": (
-        "streams/kitchen_module.py",
+        "streams/kitchen_belief.py",
         "        return float(pb2.weights[same & (d < r)].sum()) <= EPS\n",
         "        return float(pb2.weights[same & (d < r)].sum()) > EPS\n",
     ),

@@ -19,7 +19,7 @@
 Example::
 
     from ssr_compile.policy import PolicySettings, run_policy
-    from ssr_compile.streams.kitchen_env import make_episode
+    from ssr_compile.streams.environments.kitchen import make_episode
     result = run_policy(make_episode("inspect", 0), PolicySettings(variant="both"))
 """
 
@@ -55,7 +55,8 @@ from ssr_compile.resources import domains_dir
 from ssr_compile.solver import Step
 from ssr_compile.stream import StreamsModule
 
-from .kitchen_module import MODEL, STREAM_INFO, KitchenModule, to_action
+from ..kitchen_belief import MODEL
+from ..kitchen_module import STREAM_INFO, KitchenModule, to_action
 
 PLACED_STD = (0.01, 0.01, 0.0, math.radians(3.0))  # belief of an object just placed
 PLACED_PARTICLES = 100

@@ -2,7 +2,7 @@
 particle beliefs drawn over it and the executed action written in the frame
 (``ssr-compile run TASK --gif FILE``).
 
-``make_episode`` is the kitchen's episode factory (:func:`.kitchen_env.make_episode`) with a
+``make_episode`` is the kitchen's episode factory (:func:`.kitchen.make_episode`) with a
 renderer attached; the example's ``example.toml`` names it.
 """
 
@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 from ssr_compile.sim.problem import to_world  # noqa: E402
 from ssr_compile.sim.render import HEIGHT, PARTICLE_COLORS, WIDTH, project, render_image  # noqa: E402
 
-from .kitchen_env import make_episode as _kitchen_episode  # noqa: E402
+from .kitchen import make_episode as _kitchen_episode  # noqa: E402
 
 
 def frame(environment, agent, caption: str) -> np.ndarray:
