@@ -1,4 +1,4 @@
-"""Pictures of a task's scene (DESIGN §7): the fixed camera's view, or a top view with the
+"""Pictures of a task's scene (docs/design.md §7): the fixed camera's view, or a top view with the
 prior belief's particles (a uniform sample over each object's prior surfaces) drawn on it.
 
 Rendered with pybullet's TinyRenderer in DIRECT mode; saved as PNG with matplotlib.

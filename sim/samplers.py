@@ -1,4 +1,4 @@
-"""Geometric streams of the kitchen domain (paper §IV, DESIGN §6), as plain callables.
+"""Geometric streams of the kitchen domain (paper §IV, docs/design.md §6), as plain callables.
 
 Generator streams return iterables of output tuples, function streams return one tuple or
 None, tests return bool.  All of them act on a :class:`ssr_compile.sim.world.World` (checking hypothetical
@@ -588,7 +588,7 @@ class KitchenStreams:
 
 
 def stream_table(ks: KitchenStreams) -> dict[str, Callable]:
-    """Stream names (paper §IV, DESIGN §6) -> callables, for a streams module to bind."""
+    """Stream names (paper §IV, docs/design.md §6) -> callables, for a streams module to bind."""
     return {
         "sample-grasp": ks.sample_grasps,
         "sample-placement": ks.sample_placements,

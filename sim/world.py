@@ -1,4 +1,4 @@
-"""The PyBullet kitchen of paper §VIII, built from primitives (DESIGN §6).
+"""The PyBullet kitchen of paper §VIII, built from primitives (docs/design.md §6).
 
 Layout (metres, world frame; the robot works in ``x < 0.8`` and faces +x):
 

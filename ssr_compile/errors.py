@@ -2,7 +2,7 @@
 
 Every error a user's *input* can cause is an :class:`SSRError` (exit 2).  Errors that point
 into a file carry the file name, line and column and render the offending line with a caret, so
-the CLI can print them as they are (DESIGN §7).
+the CLI can print them as they are (docs/design.md §7).
 
 A failure of *code* -- a planner backend that crashed, a user's stream implementation that
 raised or misbehaved, a bug in ssr-compile itself -- is a :class:`Failure` (exit 3): one line

@@ -1,4 +1,4 @@
-"""The Python stream API (paper §IV; DESIGN §4 "Streams").
+"""The Python stream API (paper §IV; docs/design.md §4 "Streams").
 
 A stream declared in a stream file is implemented by a Python callable bound by name:
 
@@ -253,7 +253,7 @@ def from_module(module, name: str | None = None) -> StreamsModule:
 
 
 class ValueTable:
-    """Python values keyed by object name (DESIGN §4 "Values and names").
+    """Python values keyed by object name (docs/design.md §4 "Values and names").
 
     Objects of the problem map to their ``VALUES`` entry (or to their own name); every new
     value a stream produces gets a fresh name ``v<N>`` (equal hashable values share a name).

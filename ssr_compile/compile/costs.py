@@ -64,7 +64,7 @@ def compile_costs(
     scale: int | None = None,
     unit_cost: bool = False,
 ) -> Costed:
-    """Make costs plain integer action costs (paper §V-A; DESIGN §4 "Costs").
+    """Make costs plain integer action costs (paper §V-A; docs/design.md §4 "Costs").
 
     ``(increase (total-cost) (F args))`` with ``F`` a stream function stays a static numeric
     fluent whose values (given in the problem's init by instantiation) are scaled to integers

@@ -1,4 +1,4 @@
-"""Planner backends (DESIGN §4 "Planner backend") and their registry.
+"""Planner backends (docs/design.md §4 "Planner backend") and their registry.
 
 Backends are found through the entry-point group ``ssr_compile.planners``; the built-ins
 (``fd``, ``pyperplan``, ``up``) are registered there too, so a third-party package adds a

@@ -1,4 +1,4 @@
-"""The planner backend protocol (DESIGN §4 "Planner backend").
+"""The planner backend protocol (docs/design.md §4 "Planner backend").
 
 A backend takes a plain cost-PDDL domain and problem (syntax trees, no streams) and returns a
 :class:`PlanResult`.  It states what it supports in :class:`Capabilities`, so that the compiler

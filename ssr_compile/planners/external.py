@@ -1,4 +1,4 @@
-"""The base of every backend that plans outside this process (DESIGN §4 "Planner backend").
+"""The base of every backend that plans outside this process (docs/design.md §4 "Planner backend").
 
 :class:`ExternalPlanner` does, once for all of them, what such a call needs: refuse a task
 outside the backend's :class:`~ssr_compile.planners.base.Capabilities`, make a private

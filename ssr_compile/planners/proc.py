@@ -1,4 +1,4 @@
-"""Running planner work under a wall-clock limit that is really enforced (DESIGN §7).
+"""Running planner work under a wall-clock limit that is really enforced (docs/design.md §7).
 
 Two tools: :func:`run_command` runs a planner binary as a subprocess in its own process group
 and kills the whole group when the limit passes; :func:`run_forked` runs a Python function in a
