@@ -45,14 +45,20 @@ def driver_command(folder: Path, search: str) -> list[str]:
 
     script = Path(up_fast_downward.__file__).parent / "downward" / "fast-downward.py"
     return [
-        sys.executable, str(script), "--plan-file", str(folder / "plan"),
-        str(folder / "domain.pddl"), str(folder / "problem.pddl"), "--search", search,
+        sys.executable,
+        str(script),
+        "--plan-file",
+        str(folder / "plan"),
+        str(folder / "domain.pddl"),
+        str(folder / "problem.pddl"),
+        "--search",
+        search,
     ]
 
 
-def timed(fn) -> float:
+def timed(fn, *args, **kwargs) -> float:
     start = time.perf_counter()
-    fn()
+    fn(*args, **kwargs)
     return time.perf_counter() - start
 
 
@@ -68,7 +74,9 @@ def main() -> None:
 
     fd, up = get_planner("fd"), get_planner("up:fast-downward")
     wanted = args.problems.split(",")  # "" matches every problem
-    print(f"{'problem':32s} {'fd s':>7s} {'driver s':>9s} {'up s':>7s} {'driver/fd':>10s} {'up/fd':>7s}")
+    print(
+        f"{'problem':32s} {'fd s':>7s} {'driver s':>9s} {'up s':>7s} {'driver/fd':>10s} {'up/fd':>7s}"
+    )
     for example, pfile, level in SHIPPED_PROBLEMS:
         label = f"{example}/{pfile.removesuffix('.pddl')}"
         if not any(w in label for w in wanted):
@@ -86,11 +94,18 @@ def main() -> None:
             up.solve(ground.domain, ground.problem, time_limit=60)  # warm: imports
             times: dict[str, list[float]] = {"fd": [], "driver": [], "up": []}
             for _ in range(args.calls):
-                times["fd"].append(timed(lambda: fd.solve(lifted.domain, lifted.problem, time_limit=60)))
-                times["driver"].append(timed(lambda: subprocess.run(
-                    cmd, cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True
-                )))
-                times["up"].append(timed(lambda: up.solve(ground.domain, ground.problem, time_limit=60)))
+                times["fd"].append(timed(fd.solve, lifted.domain, lifted.problem, time_limit=60))
+                times["driver"].append(
+                    timed(
+                        subprocess.run,
+                        cmd,
+                        cwd=folder,
+                        stdout=subprocess.DEVNULL,
+                        stderr=subprocess.DEVNULL,
+                        check=True,
+                    )
+                )
+                times["up"].append(timed(up.solve, ground.domain, ground.problem, time_limit=60))
         m = {k: statistics.median(v) for k, v in times.items()}
         print(
             f"{label:32s} {m['fd']:7.3f} {m['driver']:9.3f} {m['up']:7.3f} "
