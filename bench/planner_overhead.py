@@ -75,8 +75,15 @@ def main() -> None:
         for spec in planners:
             med = statistics.median(times[spec])
             rows.append(
-                (problem, spec, first[spec].status, med, min(times[spec]),
-                 cpu[spec] / args.calls, med / base)
+                (
+                    problem,
+                    spec,
+                    first[spec].status,
+                    med,
+                    min(times[spec]),
+                    cpu[spec] / args.calls,
+                    med / base,
+                )
             )
     head = (
         f"{'problem':<8} {'planner':<22} {'status':<11} {'median ms':>9} {'min ms':>7}"

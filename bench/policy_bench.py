@@ -78,10 +78,13 @@ def main() -> None:
                     if c.comparison_time
                 ]
                 if compared:
-                    ratio = f"{median([c.constrained_time / c.comparison_time for c in compared]):.2f}"
+                    ratio = (
+                        f"{median([c.constrained_time / c.comparison_time for c in compared]):.2f}"
+                    )
             overhead = median(
                 [
-                    c.overhead_time / (c.overhead_time + c.planning_time + c.execution_time + c.update_time)
+                    c.overhead_time
+                    / (c.overhead_time + c.planning_time + c.execution_time + c.update_time)
                     for c in cycles
                     if c.planning_time > 0
                 ]

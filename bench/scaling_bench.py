@@ -60,7 +60,12 @@ def generate(n: int, blockers: bool = False, room: float = 0.8):
         values[b] = T.Block(b, WIDTH, HEIGHT)
         values[p] = T.Pose(round(x, 3))
         objects += [b, p]
-        init += [f"(Block {b})", f"(Pose {b} {p})", f"(AtPose {b} {p})", f"(Contained {b} {p} {region})"]
+        init += [
+            f"(Block {b})",
+            f"(Pose {b} {p})",
+            f"(AtPose {b} {p})",
+            f"(Contained {b} {p} {region})",
+        ]
         if b.startswith("b"):
             goal.append(f"(In {b} rgoal)")
     text = (
@@ -193,6 +198,7 @@ def print_row(n: int, algorithm: str, rows: list) -> None:
         f"{med[3]:6.0f} {med[4]:8.2f} {med[5]:8.0f} {med[6]:7.0f}",
         flush=True,
     )
+
 
 if __name__ == "__main__":
     main()

@@ -109,7 +109,9 @@ def replay(folders: list[Path], settings: list[str], runs: int) -> None:
     from ssr_compile.compile.constraints import is_chained
     from ssr_compile.parse import parse_domain
 
-    names = sorted(set.intersection(*({p.name for p in f.iterdir() if p.is_dir()} for f in folders)))
+    names = sorted(
+        set.intersection(*({p.name for p in f.iterdir() if p.is_dir()} for f in folders))
+    )
     columns = [(f, s) for f in folders for s in settings]
     totals = {c: {"c": [0.0, 0.0, 0], "u": [0.0, 0.0, 0]} for c in columns}
     agree = dict.fromkeys(columns, 0)
@@ -170,8 +172,10 @@ def main() -> None:
     settings = [s.strip() for s in args.invariants.split(",") if s.strip()]
     bad = [s for s in settings if s not in ("on", "off", "auto")]
     if bad or args.runs < 1 or args.cycles < 1:
-        ap.error(f"--invariants takes on, off, auto (got {', '.join(bad) or args.invariants}); "
-                 "--runs and --cycles at least 1")
+        ap.error(
+            f"--invariants takes on, off, auto (got {', '.join(bad) or args.invariants}); "
+            "--runs and --cycles at least 1"
+        )
     if args.capture is not None:
         capture(args.capture, args.task, args.seed, args.cycles, args.variant)
         if not args.replay:

@@ -111,7 +111,9 @@ class PlannerFailure(Failure):
     """A planner backend crashed or answered with an error."""
 
     def __init__(self, planner: str, message: str, *, detail: str = ""):
-        super().__init__(f"planner {planner}", f"planner {planner} failed: {message}", detail=detail)
+        super().__init__(
+            f"planner {planner}", f"planner {planner} failed: {message}", detail=detail
+        )
         self.planner = planner
 
 

@@ -310,4 +310,3 @@ class Build(FormulaRules, DomainRules, ProblemRules, StreamRules):
 
     def start(self, file):
         return file
-

@@ -556,9 +556,7 @@ class _Policy:
         self.state = ReplanState(
             tail or None,
             frozenset(
-                n
-                for n in constants
-                if n in kept_values or n in {o.name for o in problem.objects}
+                n for n in constants if n in kept_values or n in {o.name for o in problem.objects}
             ),
             kept_facts,
             kept_values,

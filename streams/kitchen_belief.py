@@ -55,7 +55,9 @@ class BeliefStreams:
         on &= self._seeable(o, pb, s)
         regions = (
             out
-            for out in sample_obs(o, pb, self.rng, delta=DELTA, eps=EPS, heaviest_first=True, among=on)
+            for out in sample_obs(
+                o, pb, self.rng, delta=DELTA, eps=EPS, heaviest_first=True, among=on
+            )
             if self.obscost(o, pb, out[0]) is not None
         )
         yield from self._clear_first(o, regions)

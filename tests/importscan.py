@@ -69,5 +69,7 @@ def import_statements(path: Path, root: Path = ROOT) -> list[tuple[int, str, tup
         if isinstance(node, ast.Import):
             out.extend((node.lineno, a.name, ()) for a in node.names)
         elif isinstance(node, ast.ImportFrom):
-            out.append((node.lineno, _from_module(node, package), tuple(a.name for a in node.names)))
+            out.append(
+                (node.lineno, _from_module(node, package), tuple(a.name for a in node.names))
+            )
     return sorted(out)

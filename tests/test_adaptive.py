@@ -38,7 +38,10 @@ def solve_tamp2d(folder: str, name: str, **options):
     options.setdefault("planner", "fd:opt")  # as example.toml
     options.setdefault("initial_level", 3)
     sol = solve(
-        domain, streams, problem, from_module(T),
+        domain,
+        streams,
+        problem,
+        from_module(T),
         SolveOptions(time_limit=20, algorithm="adaptive", **options),
     )
     assert sol.solved, sol.message

@@ -23,7 +23,9 @@ PLANNERS = ["fd", "pyperplan", "up:fast-downward", "up:pyperplan"]
 def _cells():
     for example, pfile, level in PROBLEMS:
         for planner in PLANNERS:
-            yield pytest.param(example, pfile, level, planner, id=f"{example}/{pfile[:-5]}-{planner}")
+            yield pytest.param(
+                example, pfile, level, planner, id=f"{example}/{pfile[:-5]}-{planner}"
+            )
 
 
 @pytest.mark.parametrize("example,pfile,level,planner", list(_cells()))

@@ -269,9 +269,13 @@ def test_no_posterior_collapse_after_one_detection():
     errors, spreads, collapsed = [], [], 0
     for _ in range(60):
         pb = PoseBelief.uniform("o", [d1, d2], 200, rng, z_offset=0.02, by_area=False)
-        true = np.array([rng.uniform(0.45, 0.75), rng.uniform(-0.25, 0.25), 0.22, rng.uniform(-3, 3)])
+        true = np.array(
+            [rng.uniform(0.45, 0.75), rng.uniform(-0.25, 0.25), 0.22, rng.uniform(-3, 3)]
+        )
         z = true + rng.normal(size=4) * np.array(model.sigma)
-        plain = update(pb, z, np.ones(200, bool), model, rng=np.random.default_rng(0), rejuvenate=False)
+        plain = update(
+            pb, z, np.ones(200, bool), model, rng=np.random.default_rng(0), rejuvenate=False
+        )
         collapsed += float(plain.std("d1")[:2].max()) < 1e-6
         post = update(pb, z, np.ones(200, bool), model, rng=np.random.default_rng(0))
         assert post.prob_surface("d1") > 0.95

@@ -366,6 +366,7 @@ def test_costs_make_the_trade_off(grounded):
 
 # ------------------------------------------------------------------ (c) the Focused solver
 
+
 def solve_example(which: str, planner: str = "fd:opt"):
     from ssr_compile.solver import SolveOptions, solve
 

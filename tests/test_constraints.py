@@ -114,18 +114,27 @@ def test_free_values_are_narrowed_to_what_the_tail_admits():
     aq2 = next(k for k, v in c.free.items() if v == "aq2")
     move, pick = c.domain.actions
     assert S.Atom(MAY, (S.Const(aq2), S.Var("?q2"))) in S.conjuncts(move.precondition)
-    assert not any(a.pred == MAY and a.args[0] == S.Const(aq2) for a in S.conjuncts(pick.precondition) if isinstance(a, S.Atom))
+    assert not any(
+        a.pred == MAY and a.args[0] == S.Const(aq2)
+        for a in S.conjuncts(pick.precondition)
+        if isinstance(a, S.Atom)
+    )
     # A value another step adds stays possible: after a motion to aq8, the pick may use it.
     d, _ = _task()
     p2 = replace(p, init=p.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq8")))),))
-    two = [("move", ("arm", "aq1", "at1", "aq2")), ("move", ("arm", "aq2", "at2", "aq3")),
-           ("pick", ("d", "p1", "gd", "bq1", "aq3"))]
+    two = [
+        ("move", ("arm", "aq1", "at1", "aq2")),
+        ("move", ("arm", "aq2", "at2", "aq3")),
+        ("pick", ("d", "p1", "gd", "bq1", "aq3")),
+    ]
     c2 = constrain_plan(d, p2, two, lambda v: v in CONSTANTS)
     # (aq3: aq8 only, from aq7; nothing moves on from aq8): the pick takes no argument
     assert c2.domain.actions[2].parameters == ()
     assert c2.map_plan([("pick-step3", ())]) == [("pick", ("d", "p9", "gd", "bq1", "aq8"))]
     fd = get_planner("fd")
-    lowered = compile_problem(d, None, p2, caps=fd.capabilities, plan_tail=two, is_constant=CONSTANTS.__contains__)
+    lowered = compile_problem(
+        d, None, p2, caps=fd.capabilities, plan_tail=two, is_constant=CONSTANTS.__contains__
+    )
     result = fd.solve(lowered.domain, lowered.problem, time_limit=20)
     assert lowered.map_plan(result.actions) == [
         ("move", ("arm", "aq0", "at5", "aq7")),
@@ -133,10 +142,22 @@ def test_free_values_are_narrowed_to_what_the_tail_admits():
         ("pick", ("d", "p9", "gd", "bq1", "aq8")),
     ]
     # A static fact the tail needs and nothing states: no value is left, and no plan.
-    gone = replace(p, init=tuple(f for f in p.init if not (isinstance(f, S.Atom) and f.pred == "kin" and f.args[0].name == "d")))
+    gone = replace(
+        p,
+        init=tuple(
+            f
+            for f in p.init
+            if not (isinstance(f, S.Atom) and f.pred == "kin" and f.args[0].name == "d")
+        ),
+    )
     c3 = constrain_plan(d, gone, TAIL, lambda v: v in CONSTANTS)
-    assert not any(isinstance(f, S.Atom) and f.pred == MAY and c3.free[f.args[0].name] == "aq2" for f in c3.problem.init)
-    lowered = compile_problem(d, None, gone, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    assert not any(
+        isinstance(f, S.Atom) and f.pred == MAY and c3.free[f.args[0].name] == "aq2"
+        for f in c3.problem.init
+    )
+    lowered = compile_problem(
+        d, None, gone, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__
+    )
     assert fd.solve(lowered.domain, lowered.problem, time_limit=20).status != "solved"
 
 
@@ -200,10 +221,15 @@ def test_a_value_used_twice_in_one_step_is_one_parameter():
 
 def test_constants_and_order_and_last_step_are_required():
     d, p, c = _constrained()
-    with pytest.raises(PlanInvalid):  # the step picks d, the constant (not e, which kin admits at aq0)
+    with pytest.raises(
+        PlanInvalid
+    ):  # the step picks d, the constant (not e, which kin admits at aq0)
         plan_preimage(c.domain, c.problem, [("pick-step2", ("aq0",))])
     # A step applied twice: the chain consumed its marker (the motion back exists here).
-    back = replace(c.problem, init=c.problem.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq0")))),))
+    back = replace(
+        c.problem,
+        init=c.problem.init + (S.Atom("motion", tuple(map(S.Const, ("aq7", "at5", "aq0")))),),
+    )
     twice = [("move-step1", ("at5", "aq7")), ("move-step1", ("at5", "aq0"))]
     with pytest.raises(PlanInvalid, match="goal"):  # one application: applicable
         plan_preimage(c.domain, back, twice[:1])
@@ -285,7 +311,9 @@ def test_fd_skips_invariant_synthesis_for_a_constrained_task_only(tmp_path):
         goal=S.Atom("atconf", (S.Const("arm"), S.Const("aq8"))),
     )
     free = compile_problem(d, None, p3, caps=fd.capabilities)
-    c = compile_problem(d, None, p, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    c = compile_problem(
+        d, None, p, caps=fd.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__
+    )
     assert is_chained(c.domain) and not is_chained(free.domain)
     (tmp_path / "d.pddl").write_text(to_text(c.domain))
     (tmp_path / "p.pddl").write_text(to_text(c.problem))
@@ -310,10 +338,15 @@ def test_fd_skips_invariant_synthesis_for_a_constrained_task_only(tmp_path):
         shutil.rmtree(folder)
         plans[setting] = task.map_plan(result.actions)
     assert binary == {"on": False, "auto": True, "off": True, "auto-free": False}
-    assert plans["on"] == plans["auto"] == plans["off"] == [
-        ("move", ("arm", "aq0", "at5", "aq7")),
-        ("pick", ("d", "p9", "gd", "bq1", "aq7")),
-    ]
+    assert (
+        plans["on"]
+        == plans["auto"]
+        == plans["off"]
+        == [
+            ("move", ("arm", "aq0", "at5", "aq7")),
+            ("pick", ("d", "p9", "gd", "bq1", "aq7")),
+        ]
+    )
     with pytest.raises(SSRError, match="auto, on or off"):
         FastDownward(invariants="sometimes")
 
@@ -327,7 +360,9 @@ def test_up_fast_downward_skips_invariant_synthesis_on_a_constrained_ground_task
 
     d, p = _task()
     up = get_planner("up:fast-downward")
-    c = compile_problem(d, None, p, caps=up.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__)
+    c = compile_problem(
+        d, None, p, caps=up.capabilities, plan_tail=TAIL, is_constant=CONSTANTS.__contains__
+    )
     free = compile_problem(d, None, p, caps=up.capabilities)
     assert all(not decl.params for decl in c.domain.predicates)  # the grounding pass ran
     assert is_chained(c.domain) and not is_chained(free.domain)
@@ -336,9 +371,12 @@ def test_up_fast_downward_skips_invariant_synthesis_on_a_constrained_ground_task
     assert "fast_downward_translate_options" not in up.engine_params(free.domain)
     always = get_planner("up:fast-downward", invariants="on")
     assert "fast_downward_translate_options" not in always.engine_params(c.domain)
-    assert get_planner("up:fast-downward", invariants="off").engine_params(free.domain)[
-        "fast_downward_translate_options"
-    ] == off
+    assert (
+        get_planner("up:fast-downward", invariants="off").engine_params(free.domain)[
+            "fast_downward_translate_options"
+        ]
+        == off
+    )
     result = up.solve(c.domain, c.problem, time_limit=60)
     assert result.status == "solved", result.message
     assert c.map_plan(result.actions) == [

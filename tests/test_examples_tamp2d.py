@@ -343,7 +343,10 @@ def _solve(folder: Path, name: str, time_limit: float = 10, **options):
     solver = pytest.importorskip("ssr_compile.solver")
     domain, streams, problem = load(folder, name)
     solution = solver.solve(
-        domain, streams, problem, from_module(T),
+        domain,
+        streams,
+        problem,
+        from_module(T),
         solver.SolveOptions(time_limit=time_limit, **options),
     )
     assert solution.solved, solution.message

@@ -223,7 +223,9 @@ def test_shared_optimistic_outputs_solve_and_the_plan_simulates(problem):
     assert sol.status == "solved", sol.message
     values, b_pose = _values_with_b(module, problem)
     _simulate(sol.plan, values, {"a": values["pa"], "b": values[b_pose]})
-    assert all(len(z) == 4 for z in sol.stats.sizes) and len(sol.stats.sizes) == sol.stats.iterations
+    assert (
+        all(len(z) == 4 for z in sol.stats.sizes) and len(sol.stats.sizes) == sol.stats.iterations
+    )
 
 
 def test_cheap_functions_are_evaluated_eagerly_and_the_plan_is_as_cheap():
@@ -245,8 +247,9 @@ def test_cheap_tests_are_evaluated_before_planning_and_no_plan_rests_on_a_failed
     _simulate(eager.plan, values, {"a": values["pa"], "b": values[b_pose]})
     # a test over real inputs is evaluated before any plan can count on it: a stream plan's
     # test failing on real inputs would have been found eagerly
-    assert not any("test-cfree" in line and line.endswith("failed") for line in said
-                   if "opt" not in line)
+    assert not any(
+        "test-cfree" in line and line.endswith("failed") for line in said if "opt" not in line
+    )
 
 
 def test_a_plan_whose_stream_plan_all_succeeds_is_the_solution_with_the_values_drawn():
@@ -419,7 +422,6 @@ def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_pa
     assert sol.stats.levels == sorted(set(sol.stats.levels))
 
 
-
 def test_eager_streams_are_drawn_before_planning_and_a_failure_is_never_planned_with():
     """StreamInfo.eager: an instance whose domain holds in the real facts is drawn before the
     first planner call; one that found nothing (b's pose out of reach) is in no stream plan;
@@ -461,7 +463,9 @@ def test_eager_streams_are_drawn_before_planning_and_a_failure_is_never_planned_
     values = dict(module.values)
     _simulate(eager_sol.plan, values, {"a": values["pa"], "b": values["pb-far"]})
     # the lazy solver draws it only once a plan asked for it
-    assert "kin b 9.0" not in lazy_events or lazy_events.index("kin b 9.0") > lazy_events.index("plan")
+    assert "kin b 9.0" not in lazy_events or lazy_events.index("kin b 9.0") > lazy_events.index(
+        "plan"
+    )
     assert events.index("kin b 9.0") < events.index("plan")  # drawn before planning
     assert events.count("kin b 9.0") == 1  # a function: one draw, then exhausted
     plans = [line for line in said if "stream plan:" in line]

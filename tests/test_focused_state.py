@@ -72,7 +72,10 @@ def test_evaluated_results_and_values_travel_in_the_state():
     kept = [r for r in first.evaluated if not r.optimistic]
     _, module = agent.problem()
     by_keywords = solve(
-        agent.domain, agent.streams, problem, module,
+        agent.domain,
+        agent.streams,
+        problem,
+        module,
         state=ReplanState(evaluated=kept, values=first.values),
     )
     _, module = agent.problem()

@@ -38,8 +38,7 @@ EXPECTED = json.loads((ROOT / "tests/fixtures/lang/features.json").read_text())
 
 def _domain(body: str) -> S.Domain:
     return parse_domain(
-        "(define (domain d) (:predicates (p ?x) (q ?x ?y) (r)) "
-        "(:functions (f ?x)) " + body + ")"
+        "(define (domain d) (:predicates (p ?x) (q ?x ?y) (r)) (:functions (f ?x)) " + body + ")"
     )
 
 
@@ -89,9 +88,7 @@ def test_when_effects_change_only_their_effect():
 
 
 def test_free_variables_of_comparisons():
-    f = S.Compare(
-        "<", S.FuncTerm("f", (S.Var("?a"),)), S.Arith("+", (S.Var("?b"), S.Num(1)))
-    )
+    f = S.Compare("<", S.FuncTerm("f", (S.Var("?a"),)), S.Arith("+", (S.Var("?b"), S.Num(1))))
     assert _names(free_variables(f)) == ["?a", "?b"]
 
 
@@ -171,9 +168,7 @@ def test_features_of_one_formula():
 
 
 def test_implied_requirements():
-    assert undeclared_requirements([":adl"], [":equality", ":action-costs"]) == [
-        ":action-costs"
-    ]
+    assert undeclared_requirements([":adl"], [":equality", ":action-costs"]) == [":action-costs"]
     assert undeclared_requirements([":fluents"], [":numeric-fluents"]) == []
 
 

@@ -12,8 +12,8 @@ importer lives in them (its own package is initialised before it).
 from __future__ import annotations
 
 import importlib
-import sys
 import re
+import sys
 from collections import deque
 from pathlib import Path
 

@@ -139,7 +139,9 @@ def test_long_tasks_in_closed_loop(task, minutes):
         assert res.success, (res.reason, res.actions)
         if task == "cook":  # the appendix's trace: a box is moved before the block is detected
             names = res.actions
-            first_box_pick = next(i for i, a in enumerate(names) if a.startswith("(pick") and "box" in a)
+            first_box_pick = next(
+                i for i, a in enumerate(names) if a.startswith("(pick") and "box" in a
+            )
             first_detect = next(i for i, a in enumerate(names) if a.startswith("(detect block"))
             assert first_box_pick < first_detect
     finally:

@@ -225,9 +225,7 @@ def test_bases_are_sampled_for_placements_but_not_for_placements_made_from_here(
     here = {o for o, s in made_by.items() if s == "sample-placement-here"}
     sampled = {o for o, s in made_by.items() if s == "sample-placement"}
     assert here and sampled
-    reach_poses = {
-        r.instance.inputs[1] for r in inst.results if r.instance.stream == "inv-reach"
-    }
+    reach_poses = {r.instance.inputs[1] for r in inst.results if r.instance.stream == "inv-reach"}
     assert reach_poses & sampled  # bases for placements sampled anywhere on a surface ...
     assert not reach_poses & here  # ... none for those sampled in reach of the robot
 
@@ -330,7 +328,9 @@ def test_holding_an_object_where_carry_is_refused_the_arm_moves_to_a_placement_f
 
         def plan(stream_file):
             for level in (2, 3, 4):
-                compiled = compile_problem(domain, stream_file, problem, level=level, disabled=failed)
+                compiled = compile_problem(
+                    domain, stream_file, problem, level=level, disabled=failed
+                )
                 used = {str(r.instance) for r in compiled.instantiation.results}
                 assert not used & {str(i) for i in failed}
                 result = get_planner("fd").solve(compiled.domain, compiled.problem, time_limit=60)
@@ -342,9 +342,12 @@ def test_holding_an_object_where_carry_is_refused_the_arm_moves_to_a_placement_f
         assert found is not None
         assert found[0][0] == "move-arm" and found[0][1][:2] == ("bq0", "aq0")
         assert [n for n, _ in found] == ["move-arm", "place"]
-        without = replace(streams, streams=tuple(
-            x for x in streams.streams if getattr(x, "name", "") != "plan-arm-motion-from"
-        ))
+        without = replace(
+            streams,
+            streams=tuple(
+                x for x in streams.streams if getattr(x, "name", "") != "plan-arm-motion-from"
+            ),
+        )
         assert len(without.streams) == len(streams.streams) - 1
         assert plan(without) is None
     finally:

@@ -292,7 +292,9 @@ def test_fd_opt_search_chosen_after_translation_when_the_guess_was_wrong(monkeyp
     text = (FIXTURES / "reach-domain.pddl").read_text()
     domain = parse_text(text.replace("(not (arrived))", "(conn ?a ?b)"), "reach-domain.pddl")
     problem = parse_text(
-        (FIXTURES / "reach-problem.pddl").read_text().replace("(:goal (arrived))", "(:goal (at p4))"),
+        (FIXTURES / "reach-problem.pddl")
+        .read_text()
+        .replace("(:goal (arrived))", "(:goal (at p4))"),
         "reach-problem.pddl",
     )
     started: list = []
@@ -306,8 +308,12 @@ def test_fd_opt_search_chosen_after_translation_when_the_guess_was_wrong(monkeyp
     monkeypatch.setattr(proc, "StartedCommand", Recording)
     result = get_planner("fd:opt").solve(domain, problem, time_limit=20)
     assert result.status == "solved", result.message
-    assert result.actions == [("move", ("p1", "p2")), ("move", ("p2", "p3")), ("move", ("p3", "p4"))]
-    (cmd, command), = started
+    assert result.actions == [
+        ("move", ("p1", "p2")),
+        ("move", ("p2", "p3")),
+        ("move", ("p3", "p4")),
+    ]
+    ((cmd, command),) = started
     assert "astar(blind())" in cmd
     assert command.proc.returncode is not None and command.proc.returncode != 0  # killed
 

@@ -62,7 +62,6 @@ SCRIPT = textwrap.dedent(
 )
 
 
-
 def _default_signals() -> None:
     # The command keeps a signal ignored that it was started ignoring (nohup): the test is
     # about a command started from a terminal, whatever started the test suite.

@@ -71,7 +71,9 @@ def test_numpy_values_are_lists_in_json(tmp_path, capsys):
     assert report["status"] == "solved"
     values = [v for step in report["plan"] for v in step["values"]]
     # the trajectories (numpy arrays of two floats)
-    assert any(isinstance(v, list) and len(v) == 2 and all(type(x) is float for x in v) for v in values)
+    assert any(
+        isinstance(v, list) and len(v) == 2 and all(type(x) is float for x in v) for v in values
+    )
     assert ["q", -5.0] in values  # a tuple value: a list, not a repr string
     assert all(not (isinstance(v, str) and v.startswith("array(")) for v in values)
     place = report["plan"][-1]

@@ -27,7 +27,10 @@ def test_tamp2d_with_every_backend(backend, pfile):
     ex = load_example("tamp2d")
     problem = parse_file(ex.folder / pfile)
     sol = solve(
-        ex.domain, ex.streams, problem, T.make_module(0),
+        ex.domain,
+        ex.streams,
+        problem,
+        T.make_module(0),
         SolveOptions(planner=backend, initial_level=3, time_limit=60),
     )
     assert sol.solved, sol.message
@@ -47,7 +50,10 @@ def test_belief_detect_with_every_backend(backend):
     ex = load_example("belief-detect")
     problem = parse_file(ex.folder / "problem-occluded.pddl")
     sol = solve(
-        ex.domain, ex.streams, problem, bd.make_module(0),
+        ex.domain,
+        ex.streams,
+        problem,
+        bd.make_module(0),
         SolveOptions(planner=backend, initial_level=3, time_limit=60),
     )
     assert sol.solved, sol.message
@@ -65,8 +71,17 @@ def test_belief_detect_with_every_backend(backend):
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_kitchen_inspect_with_every_backend(backend, capsys):
     code = main(
-        ["solve", "kitchen", "--problem", "inspect", "--json", "--time-limit", "120",
-         "--planner", backend]
+        [
+            "solve",
+            "kitchen",
+            "--problem",
+            "inspect",
+            "--json",
+            "--time-limit",
+            "120",
+            "--planner",
+            backend,
+        ]
     )
     out = json.loads(capsys.readouterr().out)["results"][0]
     assert code == 0, out["message"]

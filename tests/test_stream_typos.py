@@ -29,8 +29,16 @@ def test_check_names_where_the_unknown_predicate_is(tmp_path, capsys):
 def test_solve_without_a_plan_says_which_stream_never_fires(tmp_path, capsys):
     path, line = _typo(tmp_path)
     code = main(
-        ["solve", str(TAMP / "domain.pddl"), str(path), str(TAMP / "problem.pddl"),
-         "--streams", "ssr_compile.streams.tamp2d", "--max-level", "3"]  # fmt: skip
+        [
+            "solve",
+            str(TAMP / "domain.pddl"),
+            str(path),
+            str(TAMP / "problem.pddl"),
+            "--streams",
+            "ssr_compile.streams.tamp2d",
+            "--max-level",
+            "3",
+        ]  # fmt: skip
     )
     captured = capsys.readouterr()
     assert code == 1

@@ -46,9 +46,7 @@ def test_belief_detect_modules_do_not_share_a_generator():
 def test_older_protocols_still_work(tmp_path):
     mod = tmp_path / "legacy_streams.py"
     mod.write_text(
-        "SEEN = []\n"
-        "def seed(n):\n    SEEN.append(n)\n"
-        "STREAMS = {'s': lambda: iter(())}\n"
+        "SEEN = []\ndef seed(n):\n    SEEN.append(n)\nSTREAMS = {'s': lambda: iter(())}\n"
     )
     module = module_for_problem(str(mod), tmp_path / "p.pddl", seed=7)
     assert module.module.SEEN == [7]

@@ -46,12 +46,31 @@ def _solve(name: str) -> dict:
 def _run(spec: str) -> dict:
     task, seed = spec.split(":")
     doc = _json(["ssr-compile", "run", task, "--seed", seed, "--json"])
-    keep = ("success", "believed", "reason", "cycles", "actions", "constrained_held",
-            "fallbacks", "stream_calls", "planner_calls")
+    keep = (
+        "success",
+        "believed",
+        "reason",
+        "cycles",
+        "actions",
+        "constrained_held",
+        "fallbacks",
+        "stream_calls",
+        "planner_calls",
+    )
     out = {k: doc.get(k) for k in keep}
     out["trace"] = [
-        {k: c.get(k) for k in ("action", "constrained", "stream_calls", "planner_calls",
-                               "plan", "cost", "failed")}
+        {
+            k: c.get(k)
+            for k in (
+                "action",
+                "constrained",
+                "stream_calls",
+                "planner_calls",
+                "plan",
+                "cost",
+                "failed",
+            )
+        }
         for c in doc.get("trace", [])
     ]
     return out if "trace" in doc else doc
@@ -69,7 +88,7 @@ def main(argv: list[str]) -> int:
         return 0 if same else 1
     out_path, episodes = argv[0], list(EPISODES)
     if "--kitchen" in argv:
-        episodes = argv[argv.index("--kitchen") + 1:]
+        episodes = argv[argv.index("--kitchen") + 1 :]
     result = {}
     for name in EXAMPLES:
         print(f"solve {name}", file=sys.stderr)

@@ -506,10 +506,7 @@ def _regularised_posterior(
     d = z[None, :] - belief.poses
     d[:, 3] = wrap_angle(d[:, 3])
     with np.errstate(divide="ignore"):
-        log_w = (
-            np.log(belief.weights)
-            - 0.5 * np.sum(d**2 / tot + np.log(2 * np.pi * tot), axis=1)
-        )
+        log_w = np.log(belief.weights) - 0.5 * np.sum(d**2 / tot + np.log(2 * np.pi * tot), axis=1)
     log_w = np.where(mask, log_w, -np.inf)
     total = logsumexp(log_w)
     if not math.isfinite(total):

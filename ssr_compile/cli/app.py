@@ -164,4 +164,3 @@ def _print_failure(line: str, e: BaseException, debug: bool, detail: str = "") -
         print(" ".join(line.split()), file=sys.stderr)
     else:
         print(" ".join(line.split()) + " (--debug shows the traceback)", file=sys.stderr)
-

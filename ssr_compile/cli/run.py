@@ -50,7 +50,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "environment (progress, belief-detect), or an example folder whose example.toml "
         'names one (environment = "module:function")',
     )
-    p.add_argument("--problem", metavar="P", help="which problem of the example (its factory decides)")
+    p.add_argument(
+        "--problem", metavar="P", help="which problem of the example (its factory decides)"
+    )
     p.add_argument("--seed", type=_count, default=0, metavar="N", help="episode seed (default 0)")
     p.add_argument(
         "--variant",
@@ -95,9 +97,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--log", metavar="FILE.jsonl", help="write one JSON line per cycle to FILE")
     p.add_argument("--gif", metavar="FILE", help="an animation of the episode (kitchen tasks)")
     p.add_argument("--json", action="store_true", help="print the outcome as JSON (no cycle lines)")
-    p.add_argument(
-        "-v", "--verbose", action="store_true", help="also print the solver's progress"
-    )
+    p.add_argument("-v", "--verbose", action="store_true", help="also print the solver's progress")
 
 
 def resolve(target: str, problem: str | None):

@@ -167,9 +167,7 @@ def _check_algorithm(text: str) -> str:
     from ..solver import ALGORITHMS
 
     if text not in ALGORITHMS:
-        raise argparse.ArgumentTypeError(
-            f"expected one of {', '.join(ALGORITHMS)}, got '{text}'"
-        )
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(ALGORITHMS)}, got '{text}'")
     return text
 
 
@@ -308,7 +306,14 @@ def run(args: argparse.Namespace) -> int:
     planner, time_limit, level, max_level, max_cost, defer, seed, algorithm, resample = (
         settings[n][0]
         for n in (
-            "planner", "time_limit", "level", "max_level", "max_cost", "defer", "seed", "algorithm",
+            "planner",
+            "time_limit",
+            "level",
+            "max_level",
+            "max_cost",
+            "defer",
+            "seed",
+            "algorithm",
             "resample",
         )
     )

@@ -200,9 +200,7 @@ def constrain_plan(
         init=problem.init + tuple(may) + (applied(0),),
         goal=conj(problem.goal, applied(n)),
     )
-    return Constrained(
-        new_domain, new_problem, steps, {v: k for k, v in free.items()}, arguments
-    )
+    return Constrained(new_domain, new_problem, steps, {v: k for k, v in free.items()}, arguments)
 
 
 def _adds(effect, bound: frozenset[str] = frozenset()):
@@ -304,7 +302,8 @@ def free_domains(
                 for other in earlier:
                     if not all(
                         values(o) is None or values(a) is None or values(o) & values(a)
-                        for q, (a, o) in enumerate(zip(args, other)) if q != j
+                        for q, (a, o) in enumerate(zip(args, other))
+                        if q != j
                     ):
                         continue
                     more = values(other[j])

@@ -388,8 +388,7 @@ def ground_atom(atom: S.Atom, binding: Mapping[str, str]) -> S.Atom:
     return S.Atom(
         atom.pred,
         tuple(
-            S.const(binding.get(t.name, t.name)) if isinstance(t, S.Var) else t
-            for t in atom.args
+            S.const(binding.get(t.name, t.name)) if isinstance(t, S.Var) else t for t in atom.args
         ),
     )
 

@@ -126,4 +126,3 @@ class RayExecutor:
         finally:
             if started_here:
                 ray.shutdown()
-

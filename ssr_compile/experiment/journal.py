@@ -68,7 +68,6 @@ def make_record(
     return rec
 
 
-
 def read_records(path: Path) -> tuple[list[dict], int]:
     """The JSON lines of ``path`` (a missing file: none) and how many lines were unreadable
     (a line cut short by a killed sweep)."""
@@ -152,4 +151,3 @@ class Journal:
             self._file.close()
         if self._lock_file:
             self._lock_file.close()
-

@@ -299,4 +299,3 @@ def _command_of(table: str) -> str | None:
     rest = table[i + len(marker) :]
     j = rest.find("\n```")
     return rest[:j] if j >= 0 else None
-

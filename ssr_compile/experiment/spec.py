@@ -186,4 +186,3 @@ def episode_specs(
 ) -> list[EpisodeSpec]:
     """Seed-major order, so that a partial sweep has every cell of the table about equally far."""
     return [EpisodeSpec(t, v, s, settings) for s in seeds for t in tasks for v in variants]
-

@@ -88,9 +88,7 @@ def cells(records: Iterable[dict]) -> tuple[list[str], list[str], dict[tuple[str
     for r in recs:
         if r["task"] not in tasks:
             tasks.append(r["task"])
-    tasks.sort(
-        key=lambda t: (TASKS.index(t) if t in TASKS else len(TASKS),)
-    )
+    tasks.sort(key=lambda t: (TASKS.index(t) if t in TASKS else len(TASKS),))
     present = {r["variant"] for r in recs}
     variants = [v for v in VARIANTS if v in present] + sorted(present - set(VARIANTS))
     out: dict[tuple[str, str], Cell] = {}
@@ -108,4 +106,3 @@ def cells(records: Iterable[dict]) -> tuple[list[str], list[str], dict[tuple[str
             sum(r.get("status") not in (FINISHED, None) for r in group),
         )
     return tasks, variants, out
-

@@ -109,4 +109,3 @@ def run_sweep(
             if bar:
                 bar.close()
     return SweepOutcome(ran, skipped, ok, records)
-

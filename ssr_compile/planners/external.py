@@ -142,7 +142,9 @@ class ExternalPlanner:
 
     def run(self, job: Job) -> list[GroundAction] | None:
         """Run :meth:`command` under the time limit and read the plan back."""
-        code = proc.run_command(self.command(job), job.clock.remaining(), cwd=job.dir, log_path=job.log)
+        code = proc.run_command(
+            self.command(job), job.clock.remaining(), cwd=job.dir, log_path=job.log
+        )
         if code is None:
             raise Stop(TIMEOUT, f"exceeded the time limit of {job.time_limit:g} s")
         actions = self.read_plan(job)
@@ -178,9 +180,7 @@ class ExternalPlanner:
         def result(status, message="", actions=None, cost=None, detail=""):
             if self.keep_files and folder:
                 message = f"{message} [files in {folder}]".strip()
-            return PlanResult(
-                status, actions, cost, clock.elapsed(), self.name, message, detail
-            )
+            return PlanResult(status, actions, cost, clock.elapsed(), self.name, message, detail)
 
         self.before(domain, problem)
         refusal = self.refuse(domain, problem)

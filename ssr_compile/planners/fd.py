@@ -114,9 +114,7 @@ def _set_options(options, domain_path: str, problem_path: str, sas_path: str, in
     options.options = ns
 
 
-def _translate(
-    domain_path: str, problem_path: str, sas_path: str, invariants: bool = True
-) -> dict:
+def _translate(domain_path: str, problem_path: str, sas_path: str, invariants: bool = True) -> dict:
     """Run the translator in this (forked) process; a summary of the SAS task written."""
     from fast_downward.translate import main as translate_main
     from fast_downward.translate import normalize, options, pddl_parser

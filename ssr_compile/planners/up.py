@@ -305,10 +305,14 @@ class UnifiedPlanning(ExternalPlanner):
         planning's ``fast-downward``, through its public ``fast_downward_translate_options``
         parameter) skips them on such tasks; "off" always, "on" never."""
         params = dict(self.params)
-        if self.engine == DEFAULT_ENGINE and not {
-            "fast_downward_alias",
-            "fast_downward_search_config",
-        } & params.keys():
+        if (
+            self.engine == DEFAULT_ENGINE
+            and not {
+                "fast_downward_alias",
+                "fast_downward_search_config",
+            }
+            & params.keys()
+        ):
             # The engine's own default, LAMA's first iteration, plans with unit costs: the
             # search of ``fd`` instead (LAMA's cost-aware weighted-A* stage), through the
             # engine's public search-configuration parameter.
@@ -327,7 +331,9 @@ class UnifiedPlanning(ExternalPlanner):
         tree = job.task if _is_ground(job.task[0]) else None
         params = self.engine_params(job.task[0])
         args = (job.domain, job.problem, self.engine, params, job.clock.remaining(), tree)
-        up_status, actions, log = self.run_forked(job, _solve_in_child, args, what="unified-planning")
+        up_status, actions, log = self.run_forked(
+            job, _solve_in_child, args, what="unified-planning"
+        )
         mapped = _STATUS.get(up_status, ERROR)
         if mapped != SOLVED:
             why = f"unified-planning status {up_status}"

@@ -290,9 +290,7 @@ class AdaptiveLoop(SolverLoop):
         ordered = order_stream_plan(now, self.module.info_for, stream_producers(now, inst))
         sk = _Skeleton(len(self.skeletons), list(plan), ordered, later, cost, compiled)
         self.skeletons.append(sk)
-        self.say(
-            f"  new {sk.describe()}: " + ", ".join(str(r.instance) for r in ordered)
-        )
+        self.say(f"  new {sk.describe()}: " + ", ".join(str(r.instance) for r in ordered))
         root = _Binding(sk, 0, {}, 0, next(self.seq))
         sk.best = root
         self.push(root)

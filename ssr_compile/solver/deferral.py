@@ -65,9 +65,7 @@ def _cost_term(r: Result) -> S.FuncTerm:
     return S.FuncTerm(r.instance.stream, tuple(S.Const(a) for a in r.instance.inputs))
 
 
-def stream_producers(
-    results: list[Result], instantiation: Instantiation
-) -> dict[int, list[int]]:
+def stream_producers(results: list[Result], instantiation: Instantiation) -> dict[int, list[int]]:
     """For each of ``results`` (by id), the ids of those among ``results`` that produce its
     inputs (every producer of a shared object) or the first producer of its domain facts."""
     ids = {id(r) for r in results}

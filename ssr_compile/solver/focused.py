@@ -280,8 +280,10 @@ class FocusedLoop(SolverLoop):
             # answer when time runs out, or when the next plan's optimistic cost is no lower
             # (tamp2d with 8 blocks drew eight valid plans, each dearer than planned, and
             # timed out with none of them).
-            self.say(f"  the plan holds with the values drawn but costs {cost:g} "
-                     f"(planned {planned:g}): kept, planning again")
+            self.say(
+                f"  the plan holds with the values drawn but costs {cost:g} "
+                f"(planned {planned:g}): kept, planning again"
+            )
             self.incumbent = drawn
             return None
         self.say(

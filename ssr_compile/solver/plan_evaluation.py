@@ -132,9 +132,7 @@ class StreamPlanEvaluation:
                 failed_facts.update(res.certified)
                 all_ok = False
                 continue
-            if self.shared and any(
-                x in self.shared for x in (*res.instance.inputs, *res.outputs)
-            ):
+            if self.shared and any(x in self.shared for x in (*res.instance.inputs, *res.outputs)):
                 ok = self.evaluate_shared(res)
                 self.settled[rid] = ok
                 if not ok:

@@ -204,7 +204,9 @@ def _effect_atoms(effect, out: set[str]) -> None:
         _effect_atoms(effect.effect, out)
 
 
-def _apply(effect, state: set[S.Atom], ev: _SupportTracker, adds: set, dels: set, costs: list) -> None:
+def _apply(
+    effect, state: set[S.Atom], ev: _SupportTracker, adds: set, dels: set, costs: list
+) -> None:
     if effect is None:
         return
     if isinstance(effect, S.And):
