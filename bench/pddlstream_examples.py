@@ -5,8 +5,9 @@ and the largest optimistic problem (objects, ground actions), then the medians p
 Problems: continuous_tamp's ``tight(N)`` for N = 1, 2, 3, 4, 6, 8 (two goal blocks into the
 5-wide red region) and ``blocked``; the generators and streams are in
 ``tests/fixtures/pddlstream/``; the domain and stream files are read in place from the shared
-corpus (``../shared/corpus/pddlstream-examples/examples``), and the script stops with a message
-when it is absent.  Figures, no assertions; each solve runs in this process, one at a time.
+corpus (``../shared/corpus`` or ``$SSR_CORPUS``, then ``pddlstream-examples/examples``), and
+the script stops with a message when it is absent.  Figures, no assertions; each solve runs in
+this process, one at a time.
 
 Run: python bench/pddlstream_examples.py [--seeds 0-9] [--only NAME ...] [--time-limit S]
      [--algorithm NAME] [--option KEY=VALUE ...] [--json OUT]
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
 import time
@@ -31,9 +33,9 @@ from ssr_compile.experiment import parse_seeds  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
 from ssr_compile.solver import SolveOptions, solve  # noqa: E402
 
-CORPUS = ROOT.parent / "shared/corpus/pddlstream-examples/examples"
-if not CORPUS.is_dir():  # a worktree: the shared folder sits beside the main checkout
-    CORPUS = Path("/work/shared/corpus/pddlstream-examples/examples")
+# the shared corpus beside the checkout, or $SSR_CORPUS (as the tests find it)
+CORPUS = Path(os.environ.get("SSR_CORPUS") or ROOT.parent / "shared/corpus")
+CORPUS = CORPUS / "pddlstream-examples/examples"
 
 # example -> (its corpus folder, its problems, make(problem, seed) -> (PDDL text, module),
 # check(problem, plan, None) raising AssertionError on a plan that breaks the world's rules)
