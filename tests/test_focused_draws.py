@@ -246,7 +246,9 @@ def test_a_draw_tested_against_more_draws_may_be_drawn_again_more_often():
     )  # fmt: skip
     assert sol.status == "solved", sol.message
     most = _most_redraws_per_stream_plan([x.strip() for x in said])
-    assert 2 < max(most) <= 8
+    # draws checked against each other take turns, and the budget grows by one ``resample``
+    # per earlier stream plan a rejection failed (plan_evaluation._rejected_limits)
+    assert 2 <= max(most) <= 8 * len(most)
     placed = sorted(st.values[1].x for st in sol.plan if st.name == "place")
     assert len(placed) == 5 and all(b - a >= 0.5 - 1e-9 for a, b in zip(placed, placed[1:]))
     # two blocks, each placement checked against the other's: at most twice, as before

@@ -127,6 +127,22 @@ class SolverLoop:
                 self.eager_streams,
             )
 
+    def function_estimates(self) -> dict[str, float]:
+        """The value each cost function's unevaluated terms are planned with: its declared
+        ``optimistic_value``; for a function that declares none, the least value it gave so
+        far in this solve (the default of 1 before any).  A default far below every real value
+        makes each plan over real arguments whose terms are not evaluated look cheaper than
+        any plan drawn (continuous_tamp: moves cost 10 and more, planned at 1), and the planner
+        is asked again for each of them once a plan is kept; declare ``optimistic_value`` for
+        a bound the planner may rely on."""
+        least: dict[str, float] = {}
+        for term, value in self.ev.real_functions.items():
+            if term.name in self.optimistic_values or value == float("inf"):
+                continue
+            if value < least.get(term.name, float("inf")):
+                least[term.name] = value
+        return {**least, **self.optimistic_values}
+
     def compile(self):
         """The optimistic problem of this level, constrained by the inherited plan tail."""
         started = time.perf_counter()
@@ -139,7 +155,7 @@ class SolverLoop:
             evaluated=self.ev.results,
             disabled=self.ev.tried,
             exhausted=self.ev.exhausted,
-            function_values=self.optimistic_values,
+            function_values=self.function_estimates(),
             real_function_values=self.ev.real_functions,
             plan_tail=self.state.tail,
             is_constant=self.state.is_constant,

@@ -23,12 +23,14 @@ class DrawMemory:
     ``resample``: draws again per result after a rejection (``SolveOptions.resample``);
     ``per_level``: rejected draws given back per instance and level (``redraws``);
     ``given_back``: those given back at this level; ``paid``: per stream, the draws again
-    after a failed draw, and how many of them gave a value."""
+    after a failed draw, and how many of them gave a value; ``rejected_plans``: the stream
+    plans of this solve whose evaluation ended failed after a test rejected a draw."""
 
     resample: int
     per_level: int
     given_back: dict[Instance, int] = field(default_factory=dict)
     paid: dict[str, list[int]] = field(default_factory=dict)
+    rejected_plans: int = 0
 
     def draw_again_pays(self, stream: str) -> bool:
         """Drawing again after a failed draw of ``stream``: not tried yet in this solve, or it
@@ -74,22 +76,34 @@ class StreamPlanEvaluation:
         self.drawn: set[int] = set()  # generator results drawn afresh in this evaluation
         self.again: dict[int, int] = {}  # draws each result had again
         self.after_failure: set[int] = set()  # results drawing again after a failed draw
+        # the values each generator result drew in this evaluation, and those to bind again
+        # (an earlier value, instead of a new draw: :meth:`_earlier_value`)
+        self.values_drawn: dict[int, list[tuple[str, ...]]] = {}
+        self.rebind: dict[int, tuple[str, ...]] = {}
+        self.rebinds: dict[int, int] = {}  # earlier values bound again, per result
         self.producer = {o: r for r in ordered for o in r.outputs}
         self.position = {id(r): i for i, r in enumerate(ordered)}
         self.rejected_limit = self._rejected_limits()
+        self.rejected = False  # did a test of this stream plan reject a draw?
         self.ok = False
 
     def _rejected_limits(self) -> dict[int, int]:
         """Draws again after rejections, per result: ``resample`` for each other draw of this
         stream plan that a test checks its outputs against (a placement among k others drawn
-        for the same plan must miss each of them: the draws it needs grow with k)."""
+        for the same plan must miss each of them: the draws it needs grow with k), times one
+        more for each stream plan of this solve a rejection already failed.  Each such failure
+        cost a planner call, on a problem larger by the values drawn (the planner then tries
+        those values pair by pair, a call per pair: two blocks into a region with one unit of
+        slack, where one pair of placements in nine fits); drawing again for the plan in hand
+        costs stream calls only, so the budget of draws follows the planner calls spent."""
         partners: dict[int, set[int]] = {id(r): set() for r in self.ordered}
         for t in self.ordered:
             if t.instance.kind == "test":
                 ids = {id(self.producer[x]) for x in t.instance.inputs if x in self.producer}
                 for rid in ids:
                     partners[rid] |= ids - {rid}
-        return {rid: self.draws.resample * max(len(p), 1) for rid, p in partners.items()}
+        scale = self.draws.resample * (1 + self.draws.rejected_plans)
+        return {rid: scale * max(len(p), 1) for rid, p in partners.items()}
 
     def run(self) -> bool:
         """Evaluate the stream plan, drawing again while that is allowed; False when time ran
@@ -103,6 +117,8 @@ class StreamPlanEvaluation:
                 break
             self._draw_again(redraw)
         self.ok = all_ok
+        if self.rejected and not all_ok:
+            self.draws.rejected_plans += 1
         return True
 
     def _one_pass(self) -> tuple[bool, list[Result]] | None:
@@ -139,6 +155,11 @@ class StreamPlanEvaluation:
                     all_ok = False
                     failed.update(res.outputs)
                 continue
+            if rid in self.rebind:
+                self.binding.update(zip(res.outputs, self.rebind.pop(rid)))
+                self.settled[rid] = True
+                self.drawn.add(rid)  # it may still draw afresh
+                continue
             if self._evaluate(res):
                 continue
             all_ok = False
@@ -162,6 +183,9 @@ class StreamPlanEvaluation:
             paid[1] += int(ok)
         if res.instance.kind == "stream" and fresh:
             self.drawn.add(rid)
+            if ok:
+                out = tuple(self.binding[o] for o in res.outputs)
+                self.values_drawn.setdefault(rid, []).append(out)
         return ok
 
     def _blame(self, res: Result, redraw: list[Result]) -> None:
@@ -182,14 +206,55 @@ class StreamPlanEvaluation:
             # drawn again (the earlier ones passed their own tests) -- values drawn in
             # turn, each against those kept.
             if kind == "test":
+                self.rejected = True
                 self.redraw_rejected(res)
+            # The draw drawn again least so far, the last of those: draws checked against
+            # each other take turns (a placement drawn where no partner fits is drawn again
+            # too, not only the partner drawn against it)
             blamed = [self.producer[x] for x in res.instance.inputs if x in self.producer]
-            blamed.sort(key=lambda r: self.position[id(r)], reverse=True)
+            blamed.sort(key=lambda r: (self._changes(r), -self.position[id(r)]))
+            if kind == "test":
+                for r in blamed:
+                    earlier = self._earlier_value(r, res)
+                    if earlier is not None and all(r is not x for x in redraw):
+                        self.rebind[id(r)] = earlier
+                        self.rebinds[id(r)] = self.rebinds.get(id(r), 0) + 1
+                        redraw.append(r)
+                        return
             redraw += [
                 r
                 for r in self._to_redraw(blamed, self.rejected_limit)[:1]
                 if all(r is not x for x in redraw)
             ]
+
+    def _changes(self, r: Result) -> int:
+        return self.again.get(id(r), 0) + self.rebinds.get(id(r), 0)
+
+    def _earlier_value(self, r: Result, test: Result) -> tuple[str, ...] | None:
+        """A value ``r`` drew earlier in this evaluation that ``test`` has not been asked
+        about with the other values bound now, and that no test of the stream plan is known
+        to reject: bound again, it pairs with the values drawn since at the price of the
+        tests alone (the draws of k placements that must miss each other give k * k pairs,
+        not k)."""
+        current = tuple(self.binding.get(o) for o in r.outputs)
+        for old in self.values_drawn.get(id(r), ()):
+            if old == current:
+                continue
+            trial = {**self.binding, **dict(zip(r.outputs, old))}
+            if bound_instance(test, trial) in self.ev.outcomes:
+                continue
+            tests = (t for t in self.ordered if t.instance.kind == "test")
+            if any(self._known_rejected(t, trial) for t in tests):
+                continue
+            return old
+        return None
+
+    def _known_rejected(self, test: Result, binding: dict[str, str]) -> bool:
+        """``test``, with every input bound under ``binding``, failed before."""
+        if any(x in self.objects and x not in binding for x in test.instance.inputs):
+            return False
+        known = self.ev.outcomes.get(bound_instance(test, binding))
+        return known is not None and not known
 
     def _draw_again(self, redraw: list[Result]) -> None:
         """The redrawn results and everything downstream of them are evaluated again."""
@@ -202,9 +267,17 @@ class StreamPlanEvaluation:
         for o in outputs:
             self.binding.pop(o, None)
         for r in redraw:
+            if id(r) in self.rebind:
+                continue
             self.again[id(r)] = self.again.get(id(r), 0) + 1
             self.stats.resamples += 1
-        self.say("  drawing again: " + ", ".join(str(r.instance) for r in redraw))
+        self.say(
+            "  drawing again: "
+            + ", ".join(
+                str(r.instance) + (" (an earlier value)" if id(r) in self.rebind else "")
+                for r in redraw
+            )
+        )
 
     def _to_redraw(self, blamed: list[Result], limit: int | dict[int, int]) -> list[Result]:
         """Those of ``blamed`` to draw again now: generator results drawn afresh in this
