@@ -54,8 +54,7 @@ def parse_option(text: str) -> tuple[str, object]:
     return key, raw
 
 
-def run_one(folder: Path, make, check, problem: str, seed: int, time_limit: float,
-            options: dict):
+def run_one(folder: Path, make, check, problem: str, seed: int, time_limit: float, options: dict):
     domain = parse_domain((folder / "domain.pddl").read_text())
     streams = parse_stream_file((folder / "stream.pddl").read_text())
     text, module = make(problem, seed)
