@@ -20,6 +20,8 @@ import json
 import math
 from typing import Any
 
+from .catalog import VARIANTS
+
 SCHEMA_VERSION = 1
 
 #: sequences of sequences longer than this are summarised unless ``full``
@@ -234,7 +236,7 @@ _RUN = {
         "example": {"type": "string"},
         "problem": {"type": ["string", "null"]},
         "seed": {"type": "integer"},
-        "variant": {"enum": ["both", "constraints", "deferred", "neither"]},
+        "variant": {"enum": sorted(VARIANTS)},
         "success": {"type": "boolean"},
         "reason": {"type": "string"},
         "cycles": {"type": "integer"},
