@@ -1,13 +1,18 @@
 """Example folders: ``domain.pddl``, ``stream.pddl``, problems and ``example.toml``.
 
-``example.toml`` keys: ``streams`` (the streams module, an import path or a ``.py`` file),
-``problems`` (file names), optional solver settings (:data:`SOLVER_KEYS`: ``planner``,
-``time_limit``, ``level``, ``max_level``, ...) and, for the online policy, ``environment``: a
-factory ``"module:function"`` called as ``function(problem, seed)`` that returns an
-:class:`ssr_compile.policy.Episode` (an environment and the agent acting in it).
+``example.toml`` keys (:data:`KEYS`): ``streams`` (the streams module, an import path or a
+``.py`` file of the folder), ``problems`` (file names), optional solver settings
+(:data:`SOLVER_KEYS`: ``planner``, ``time_limit``, ``level``, ``max_level``, ...) and, for the
+online policy, ``environment``: a factory ``"module:function"`` called as
+``function(problem, seed)`` that returns an :class:`ssr_compile.policy.Episode` (an
+environment and the agent acting in it).
 
-An example is found (:func:`resolve_folder`) and its ``example.toml`` read
-(:func:`read_settings`) here only: ``solve``, ``run`` and ``experiment`` all come through here.
+An example is found (:func:`resolve_folder`) and its ``example.toml`` read and checked
+(:func:`read_settings`, :func:`check_table`: an unknown key, a wrong type or range is bad
+input) here only: ``solve``, ``run`` and ``experiment`` all come through here, and resolve
+flags against it alike (:meth:`ExampleSettings.resolve`).  An example folder is
+self-contained: its modules import by name while its streams module or environment factory
+is imported or called (:func:`example_imports`; the folder does not stay on ``sys.path``).
 """
 
 from __future__ import annotations
@@ -197,9 +202,7 @@ def check_table(
         try:
             out[key] = _check_value(key, value, folder)
         except ValueError as e:
-            raise SSRError(
-                f"{key} = {value!r}: {e}", file=where, line=line, source=text
-            ) from None
+            raise SSRError(f"{key} = {value!r}: {e}", file=where, line=line, source=text) from None
         except SSRError as e:
             raise SSRError(
                 f"{key} = {value!r}: {e.message}", file=where, line=line, source=text
