@@ -53,7 +53,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--problem", metavar="P", help="which problem of the example (its factory decides)"
     )
-    p.add_argument("--seed", type=_count, default=0, metavar="N", help="episode seed (default 0)")
+    p.add_argument(
+        "--seed", type=_count, metavar="N", help="episode seed (default 0, or example.toml's)"
+    )
     p.add_argument(
         "--variant",
         choices=("both", "constraints", "deferred", "neither"),
@@ -84,7 +86,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--max-cycles", type=_count, default=100, metavar="N", help="at most N cycles (default 100)"
     )
-    p.add_argument("--planner", default="fd", metavar="NAME", help="planner backend (default fd)")
+    p.add_argument(
+        "--planner", metavar="NAME", help="planner backend (default fd, or example.toml's)"
+    )
     p.add_argument(
         "--resample",
         type=_count,
@@ -92,7 +96,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
         metavar="N",
         help="the solver draws a rejected draw again at once up to N times per other draw of "
         "the stream plan it is tested against (default 2; 0: off, the Focused loop as the "
-        "paper has it)",
+        "paper has it); or example.toml's",
     )
     p.add_argument("--log", metavar="FILE.jsonl", help="write one JSON line per cycle to FILE")
     p.add_argument("--gif", metavar="FILE", help="an animation of the episode (kitchen tasks)")
@@ -117,6 +121,12 @@ def run(args: argparse.Namespace) -> int:
     if args.max_cycles < 1:
         raise SSRError("--max-cycles must be at least 1")
     example, problem = resolve(args.target, args.problem)
+    # example.toml's planner, resample and seed, as `solve` reads them (a flag wins)
+    chosen = example.settings.resolve(
+        {"planner": args.planner, "resample": args.resample, "seed": args.seed},
+        {"planner": "fd", "resample": None, "seed": 0},
+    )
+    args.planner, args.resample, args.seed = (chosen[n][0] for n in ("planner", "resample", "seed"))
     factory = example.environment_factory()
     settings = PolicySettings(
         variant=args.variant,

@@ -3,7 +3,6 @@ from the command line, and the episodes they make."""
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -127,15 +126,11 @@ def resolve_task(name: str) -> Task:
 
 
 def load_task(task: Task):
-    """(example, environment factory) of a task; an example folder that is not shipped is put
-    on ``sys.path`` first, so that its environment module may sit beside its files."""
+    """(example, environment factory) of a task (its environment module may sit beside the
+    folder's files: :meth:`~ssr_compile.examples.Example.environment_factory`)."""
     from ..examples import load_example
-    from ..resources import domains_dir
 
-    folder = Path(task.folder)
-    if folder.parent.resolve() != domains_dir().resolve() and str(folder) not in sys.path:
-        sys.path.insert(0, str(folder))
-    example = load_example(folder)
+    example = load_example(Path(task.folder))
     return example, example.environment_factory()
 
 
