@@ -22,19 +22,30 @@ later cycle needs them.
 
 The policy never reads the true state: success is judged afterwards by
 :meth:`Environment.goal_holds` on the environment's true state.
+
+What the environment's and the agent's code may do (README, "Writing an environment"): an
+observation says that an action failed by ``ok`` false (:func:`failed`); an exception of their
+code ends the episode with :class:`UserCodeError` naming the method (the cycles so far are in
+its ``result``); an ``execute`` that does not return within ``PolicySettings.execute_time``
+ends it too; an action that fails ``max_failures`` times from the same problem (the agent
+learned nothing from the failures) ends it rather than being tried forever.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
+import pickle
 import time
-from collections.abc import Callable, Iterable
+from collections import Counter
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .catalog import VARIANTS
-from .errors import InstanceCapReached, TimeLimitReached
+from .errors import Failure, InstanceCapReached, TimeLimitReached
+from .json_output import to_json
 from .limits import overrunning_stream, time_limit
 from .solver import RESAMPLE, ReplanState, Solution, SolveOptions, Statistics, Step, solve
 from .stream import StreamsModule
@@ -52,6 +63,71 @@ class StreamOverrun(Exception):
     def __str__(self) -> str:
         who = f"stream '{self.stream}'" if self.stream else "a stream"
         return f"{who} did not return within the planning limit ({self.seconds:.1f} s)"
+
+
+class UserCodeError(Failure):
+    """The environment's or the agent's code raised, or returned what the contract rules out
+    (exit 3 in the CLI, like a stream's code).  ``where`` names the method
+    (``environment my_env.World.execute``), ``error`` is the exception (None: a wrong answer,
+    said in ``message``); ``result`` is the episode up to there (set by :func:`run_policy`:
+    its cycles, its reason, the goal judged in the true state if that still answers)."""
+
+    def __init__(self, where: str, error: BaseException | None = None, message: str = ""):
+        if error is not None:
+            message = f"{where} raised {type(error).__name__}: {error}{_origin(error)}"
+        super().__init__(where, f"{message or where}")
+        self.where, self.error = where, error
+        self.result: EpisodeResult | None = None
+
+    def __str__(self) -> str:
+        return f"ssr-compile: the user's code failed: {self.message}"
+
+
+def _origin(error: BaseException) -> str:
+    """`` (file:line)`` of the innermost frame of ``error``'s traceback (where it was raised)."""
+    if isinstance(error, SyntaxError) and error.filename:
+        return f" ({error.filename}:{error.lineno})"
+    tb = error.__traceback__
+    if tb is None:
+        return ""
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    return f" ({tb.tb_frame.f_code.co_filename}:{tb.tb_lineno})"
+
+
+def where(role: str, obj: Any, method: str) -> str:
+    """``role module.Class.method``: the user's method, for messages."""
+    kind = type(obj)
+    return f"{role} {kind.__module__}.{kind.__qualname__}.{method}"
+
+
+def failed(observation: Any) -> bool:
+    """Did the environment report that the action failed?  An observation says so with ``ok``
+    false: a mapping's ``"ok"`` key or an object's ``ok`` attribute (``False``, ``0``,
+    ``numpy.False_``); without ``ok`` (or ``None``, or no observation) the action succeeded."""
+    if observation is None:
+        return False
+    if isinstance(observation, Mapping):
+        ok = observation.get("ok", True)
+    else:
+        ok = getattr(observation, "ok", True)
+    if ok is None:
+        return False
+    try:
+        return not bool(ok)
+    except Exception as e:  # noqa: BLE001 - e.g. a numpy array: not a truth value
+        raise UserCodeError(
+            "environment", message=f"the observation's ok must be true or false, got {ok!r}"
+        ) from e
+
+
+def failure_text(observation: Any) -> str:
+    """What a failed observation says: its ``message`` (key or attribute), else its text."""
+    if isinstance(observation, Mapping):
+        message = observation.get("message")
+    else:
+        message = getattr(observation, "message", None)
+    return str(message) if message else str(observation)
 
 
 # ---------------------------------------------------------------- the contract
@@ -138,7 +214,12 @@ class PolicySettings:
     # level cut-off proves nothing (each level retries the samplers that found nothing).
     # Cook seed 1 gave up at level 8 after 40 s of its 600 s budget.
     unconstrained_max_level: int = 12
-    max_cost: float = math.inf  # c*: plans must be cheaper
+    max_cost: float = math.inf  # c*: plans must be cheaper; none is: the episode ends
+    # Of each ``execute`` (and ``observe``, ``goal_holds``): past it the episode ends.
+    execute_time: float = 60.0
+    # An action that failed this many times from the same problem (nothing learned from the
+    # failures: the agent's problem did not change) ends the episode.
+    max_failures: int = 3
     # the solver's draws again at once of a rejected or failed draw (``solve``'s resample)
     resample: int = RESAMPLE
     # Measurement only (bench/policy_bench.py): when a constrained attempt holds, also solve
@@ -150,12 +231,16 @@ class PolicySettings:
             raise ValueError(
                 f"unknown variant '{self.variant}'; expected one of {', '.join(VARIANTS)}"
             )
-        for name in ("budget", "constrained_time", "unconstrained_time"):
+        for name in ("budget", "constrained_time", "unconstrained_time", "execute_time"):
             v = getattr(self, name)
             if not (v > 0 and math.isfinite(v)):
                 raise ValueError(f"{name} must be a positive number of seconds, got {v}")
         if self.max_cycles < 1:
             raise ValueError(f"max_cycles must be at least 1, got {self.max_cycles}")
+        if self.max_failures < 1:
+            raise ValueError(f"max_failures must be at least 1, got {self.max_failures}")
+        if not self.max_cost > 0:
+            raise ValueError(f"max_cost must be a positive number, got {self.max_cost}")
         if self.resample < 0:
             raise ValueError(f"resample must be 0 or more, got {self.resample}")
 
@@ -203,8 +288,9 @@ class Cycle:
     unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
     comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
     plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
-    observation: str | None = None  # what the environment answered (``str`` of its observation)
-    failed: bool = False  # the environment reported the execution failed (its ``ok`` false)
+    observation: Any = None  # what the environment answered, as JSON data (``to_json``)
+    failed: bool = False  # the execution failed: the observation's ``ok`` false (``failed``)
+    failure: str | None = None  # why it failed: the observation's message, or a limit
 
     def as_dict(self) -> dict:
         d = dict(vars(self))
@@ -212,6 +298,12 @@ class Cycle:
             if isinstance(v, float):
                 d[k] = round(v, 4) if math.isfinite(v) else None
         return d
+
+    def said(self) -> str | None:
+        """What the environment answered to a failed execution, for the cycle's line."""
+        if self.failure:
+            return f"FAILED: {self.failure}"
+        return self.observation if isinstance(self.observation, str) else None
 
     def line(self) -> str:
         what = self.action if self.action is not None else "(no action)"
@@ -221,7 +313,7 @@ class Cycle:
             f"plan {self.plan_length if self.plan_length is not None else '-'} (cost {cost})  "
             f"planning {self.planning_time:7.3f} s  streams {self.stream_calls:3d}  "
             f"deferred {self.deferred:2d}  | {self.belief}"
-            + (f"  | {self.observation}" if self.failed and self.observation else "")
+            + (f"  | {self.said()}" if self.failed and self.said() else "")
         )
 
 
@@ -333,7 +425,12 @@ def run_policy(
     on_cycle: Callable[[Cycle], None] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> EpisodeResult:
-    """Run Algorithm 1 in ``episode`` until the goal belief, a failure or a limit."""
+    """Run Algorithm 1 in ``episode`` until the goal belief, a failure or a limit.
+
+    Raises :class:`UserCodeError` (its ``result``: the episode so far) when the environment's
+    or the agent's code raises, and ``TypeError`` when ``episode`` is not an :class:`Episode`."""
+    if not isinstance(episode, Episode):
+        raise TypeError(f"run_policy needs an Episode, got {type(episode).__name__}")
     return _Policy(episode, settings or PolicySettings(), on_cycle, progress).run()
 
 
@@ -369,9 +466,31 @@ class _Policy:
         self.cycles: list[Cycle] = []
         self.state = ReplanState()
         self.last_level = settings.initial_level  # the level the plan in use was found at
+        # failed executions: (the problem planned from, the action) -> how often
+        self.failures: Counter = Counter()
+
+    def user(self, role: str, obj: Any, method: str, *args: Any, limit: float | None = None):
+        """Call the environment's or the agent's ``method``: its exception becomes a
+        :class:`UserCodeError` naming it; ``limit``: seconds it may take (``TimeLimitReached``)."""
+        try:
+            with time_limit(limit):
+                return getattr(obj, method)(*args)
+        except (Exception, SystemExit) as e:
+            raise UserCodeError(where(role, obj, method), e) from e
 
     def run(self) -> EpisodeResult:
-        self.agent.update(None, self.env.observe())
+        try:
+            return self.episode()
+        except UserCodeError as e:
+            e.result = self.finish(False, e.message, after_error=True)
+            raise
+
+    def episode(self) -> EpisodeResult:
+        try:
+            first = self.user("environment", self.env, "observe", limit=self.execute_limit)
+        except TimeLimitReached:
+            return self.finish(False, self.hung(where("environment", self.env, "observe")))
+        self.user("agent", self.agent, "update", None, first)
         try:
             for index in range(1, self.settings.max_cycles + 1):
                 ended = self.cycle(_CycleState(index, time.monotonic()))
@@ -382,9 +501,28 @@ class _Policy:
             return self.finish(False, str(e))
         return self.finish(False, f"no goal within {self.settings.max_cycles} cycles")
 
-    def finish(self, believed: bool, reason: str) -> EpisodeResult:
+    @property
+    def execute_limit(self) -> float:
+        return self.settings.execute_time
+
+    def hung(self, what: str) -> str:
+        return f"{what} did not return within the execution limit of {self.execute_limit:g} s"
+
+    def finish(self, believed: bool, reason: str, after_error: bool = False) -> EpisodeResult:
+        """The result, the goal judged in the true state.  After the user's code failed
+        (``after_error``) the goal holds only if ``goal_holds`` still answers so."""
+        success = False
+        try:
+            success = bool(
+                self.user("environment", self.env, "goal_holds", limit=self.execute_limit)
+            )
+        except TimeLimitReached:
+            reason += "; " + self.hung(where("environment", self.env, "goal_holds"))
+        except UserCodeError:
+            if not after_error:
+                raise
         return EpisodeResult(
-            self.env.goal_holds(),
+            success,
             believed,
             reason,
             self.cycles,
@@ -398,7 +536,7 @@ class _Policy:
         settings = self.settings
         if settings.budget - self.planning <= 0:
             return self.finish(False, f"planning budget of {settings.budget:g} s exhausted")
-        problem, module = self.agent.problem()
+        problem, module = self.determinize()
         solution: Solution | None = None
         comparison: float | None = None
         if settings.constraints and self.state.tail:
@@ -423,14 +561,31 @@ class _Policy:
                 if self.planning >= settings.budget
                 else solution.message
             )
+            if math.isfinite(settings.max_cost) and solution.status == "unsolvable":
+                return self.finish(False, f"no plan cheaper than c* = {settings.max_cost:g}: {why}")
             return self.finish(False, f"no plan: {why}")
         if solution.stats.levels:
             self.last_level = solution.stats.levels[-1]
         if not solution.plan:
             self.log(cycle, None, solution)
             return self.finish(True, "goal belief reached")
-        self.act(cycle, problem, module, solution, comparison)
-        return None
+        return self.act(cycle, problem, module, solution, comparison)
+
+    def determinize(self) -> tuple[S.Problem, StreamsModule]:
+        """DETERMINIZE: the agent's problem, checked for its shape."""
+        answer = self.user("agent", self.agent, "problem")
+        if not (
+            isinstance(answer, tuple)
+            and len(answer) == 2
+            and isinstance(answer[0], S.Problem)
+            and isinstance(answer[1], StreamsModule)
+        ):
+            raise UserCodeError(
+                where("agent", self.agent, "problem"),
+                message=f"{where('agent', self.agent, 'problem')} returned "
+                f"{_short(answer)}, not a (Problem, StreamsModule) pair",
+            )
+        return answer
 
     def constrained_attempt(
         self, cycle: _CycleState, problem: S.Problem, module: StreamsModule
@@ -533,12 +688,15 @@ class _Policy:
         module: StreamsModule,
         solution: Solution,
         comparison: float | None,
-    ) -> None:
+    ) -> EpisodeResult | None:
         """EXECUTE the plan's first action, UPDATE the belief, keep ``ConstantFacts(f)`` and
-        the tail for the next cycle, and log the cycle."""
+        the tail for the next cycle, and log the cycle; the episode's result when it ends here
+        (``execute`` hung, or the action failed ``max_failures`` times from this problem)."""
         agent, plan = self.agent, solution.plan
         # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
-        constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
+        constants = {
+            o.name for o in problem.objects if self.user("agent", agent, "is_constant", o.name)
+        }
         constants |= _stream_constants(solution, module)
         constants |= {n for n in self.state.kept_values}
         kept_facts, kept_values = constant_facts(
@@ -549,9 +707,25 @@ class _Policy:
         tail = [(s.name, tuple(s.args)) for s in plan[1:]]
         step = plan[0]
         before_exec = time.monotonic()
-        observation = self.env.execute(step)
+        try:
+            observation = self.user(
+                "environment", self.env, "execute", step, limit=self.execute_limit
+            )
+        except TimeLimitReached:
+            hung = self.hung(where("environment", self.env, "execute") + f" of {step}")
+            self.log(
+                cycle,
+                str(step),
+                solution,
+                execution_time=time.monotonic() - before_exec,
+                comparison_time=comparison,
+                failed=True,
+                failure=f"did not return within {self.execute_limit:g} s",
+            )
+            return self.finish(False, hung)
         after_exec = time.monotonic()
-        agent.update(step, observation)
+        is_failure = failed(observation)
+        self.user("agent", agent, "update", step, observation)
         after_update = time.monotonic()
         self.state = ReplanState(
             tail or None,
@@ -568,9 +742,21 @@ class _Policy:
             execution_time=after_exec - before_exec,
             update_time=after_update - after_exec,
             comparison_time=comparison,
-            observation=None if observation is None else str(observation),
-            failed=getattr(observation, "ok", True) is False,
+            observation=to_json(observation),
+            failed=is_failure,
+            failure=failure_text(observation) if is_failure else None,
         )
+        if is_failure:
+            key = (_fingerprint(problem, module), _ground(step, problem))
+            self.failures[key] += 1
+            if self.failures[key] >= self.settings.max_failures:
+                return self.finish(
+                    False,
+                    f"{step} failed {self.failures[key]} times from the same state (the "
+                    "agent's problem did not change after its failures: it learned nothing "
+                    "from them)",
+                )
+        return None
 
     def log(self, cycle: _CycleState, action, sol, **timings) -> None:
         """Record this cycle (the policy's own time is what is left of it)."""
@@ -615,13 +801,48 @@ def _record(
         deferred,
         plan_len,
         cost,
-        agent.summary(),
+        _summary(agent),
         constrained_time=spent["c"],
         unconstrained_time=spent["u"],
         plan=plan,
     )
     record.overhead_time = max(time.monotonic() - cycle_start - record.planning_time, 0.0)
     return record
+
+
+def _summary(agent: Agent) -> str:
+    try:
+        return str(agent.summary())
+    except (Exception, SystemExit) as e:
+        raise UserCodeError(where("agent", agent, "summary"), e) from e
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 60 else text[:57] + '...'}"
+
+
+def _ground(step: Step, problem: S.Problem) -> str:
+    """The action as far as the problem names it: its arguments that are problem objects, the
+    stream outputs (new names at every solve) as ``*``."""
+    declared = {o.name for o in problem.objects}
+    return " ".join([step.name, *(a if a in declared else "*" for a in step.args)])
+
+
+def _fingerprint(problem: S.Problem, module: StreamsModule) -> Any:
+    """The state a problem describes: its objects, initial facts and goal, and the Python
+    values of its objects (an unpicklable value: a state never seen again)."""
+    names = sorted(o.name for o in problem.objects)
+    try:
+        values = pickle.dumps([(n, module.values.get(n)) for n in names], protocol=4)
+    except Exception:  # noqa: BLE001 - whatever it holds; such a state is never "the same"
+        return object()
+    return (
+        tuple(names),
+        frozenset(map(str, problem.init)),
+        str(problem.goal),
+        hashlib.sha256(values).hexdigest(),
+    )
 
 
 def summarize(results: Iterable[EpisodeResult]) -> dict:
