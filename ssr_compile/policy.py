@@ -707,26 +707,36 @@ class _Policy:
         tail = [(s.name, tuple(s.args)) for s in plan[1:]]
         step = plan[0]
         before_exec = time.monotonic()
+        executed = {"comparison_time": comparison}  # what the cycle's log says of the action
         try:
             observation = self.user(
                 "environment", self.env, "execute", step, limit=self.execute_limit
             )
-        except TimeLimitReached:
-            hung = self.hung(where("environment", self.env, "execute") + f" of {step}")
-            self.log(
-                cycle,
-                str(step),
-                solution,
-                execution_time=time.monotonic() - before_exec,
-                comparison_time=comparison,
-                failed=True,
-                failure=f"did not return within {self.execute_limit:g} s",
+        except (TimeLimitReached, UserCodeError) as e:
+            # The action's cycle is logged (failed) before the episode ends.
+            executed["execution_time"] = time.monotonic() - before_exec
+            if isinstance(e, UserCodeError):
+                self.log(cycle, str(step), solution, **executed, failed=True, failure=e.message)
+                raise
+            why = f"did not return within {self.execute_limit:g} s"
+            self.log(cycle, str(step), solution, **executed, failed=True, failure=why)
+            return self.finish(
+                False, self.hung(f"{where('environment', self.env, 'execute')} of {step}")
             )
-            return self.finish(False, hung)
         after_exec = time.monotonic()
         is_failure = failed(observation)
-        self.user("agent", agent, "update", step, observation)
-        after_update = time.monotonic()
+        executed.update(
+            execution_time=after_exec - before_exec,
+            observation=to_json(observation),
+            failed=is_failure,
+            failure=failure_text(observation) if is_failure else None,
+        )
+        try:
+            self.user("agent", agent, "update", step, observation)
+        except UserCodeError:
+            self.log(cycle, str(step), solution, **executed)
+            raise
+        executed["update_time"] = time.monotonic() - after_exec
         self.state = ReplanState(
             tail or None,
             frozenset(
@@ -735,17 +745,7 @@ class _Policy:
             kept_facts,
             kept_values,
         )
-        self.log(
-            cycle,
-            str(step),
-            solution,
-            execution_time=after_exec - before_exec,
-            update_time=after_update - after_exec,
-            comparison_time=comparison,
-            observation=to_json(observation),
-            failed=is_failure,
-            failure=failure_text(observation) if is_failure else None,
-        )
+        self.log(cycle, str(step), solution, **executed)
         if is_failure:
             key = (_fingerprint(problem, module), _ground(step, problem))
             self.failures[key] += 1
