@@ -13,6 +13,7 @@ from ..catalog import TASKS as KITCHEN_TASKS
 from ..errors import SSRError
 from ..files import write_atomically
 from ..json_output import SCHEMA_VERSION
+from .options import cost_bound, positive_count, seconds
 from .registry import register
 
 
@@ -23,16 +24,6 @@ def _positive(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'") from None
     if not (value > 0 and math.isfinite(value)):
         raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got '{text}'")
-    return value
-
-
-def _cost(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got '{text}'") from None
-    if not value > 0:  # inf: no bound
-        raise argparse.ArgumentTypeError(f"expected a positive number, got '{text}'")
     return value
 
 
@@ -104,7 +95,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--max-cost",
-        type=_cost,
+        type=cost_bound,
         default=math.inf,
         metavar="C",
         help="c*: plans must cost less than C (the problem's cost units); when none does, the "
@@ -112,7 +103,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--execute-time",
-        type=_positive,
+        type=seconds,
         default=60.0,
         metavar="S",
         help="limit of each action's execution (the environment's execute, and observe and "
@@ -120,7 +111,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--max-failures",
-        type=_count,
+        type=positive_count,
         default=3,
         metavar="N",
         help="end the episode when an action failed N times from the same state (the agent's "
@@ -207,8 +198,6 @@ def run(args: argparse.Namespace) -> int:
 
     if args.max_cycles < 1:
         raise SSRError("--max-cycles must be at least 1")
-    if args.max_failures < 1:
-        raise SSRError("--max-failures must be at least 1")
     example, problem = resolve(args.target, args.problem)
     settings = PolicySettings(
         variant=args.variant,
