@@ -23,12 +23,10 @@ later cycle needs them.
 The policy never reads the true state: success is judged afterwards by
 :meth:`Environment.goal_holds` on the environment's true state.
 
-What the environment's and the agent's code may do (README, "Writing an environment"): an
-observation says that an action failed by ``ok`` false (:func:`failed`); an exception of their
-code ends the episode with :class:`UserCodeError` naming the method (the cycles so far are in
-its ``result``); an ``execute`` that does not return within ``PolicySettings.execute_time``
-ends it too; an action that fails ``max_failures`` times from the same problem (the agent
-learned nothing from the failures) ends it rather than being tried forever.
+The user's code (README, "Writing an environment"; :mod:`ssr_compile.episode_record`): an
+exception of the environment or the agent ends the episode (``UserCodeError``, the cycles so
+far in its ``result``), as do an ``execute`` past ``execute_time`` and an action that failed
+``max_failures`` times from the same problem (the agent learned nothing from its failures).
 """
 
 from __future__ import annotations
@@ -38,13 +36,21 @@ import math
 import pickle
 import time
 from collections import Counter
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .catalog import VARIANTS
-from .errors import Failure, InstanceCapReached, TimeLimitReached
+from .episode_record import (
+    Cycle,
+    EpisodeResult,
+    UserCodeError,
+    failed,
+    failure_text,
+    where,
+)
+from .errors import InstanceCapReached, TimeLimitReached
 from .json_output import to_json
 from .limits import overrunning_stream, time_limit
 from .solver import RESAMPLE, ReplanState, Solution, SolveOptions, Statistics, Step, solve
@@ -63,71 +69,6 @@ class StreamOverrun(Exception):
     def __str__(self) -> str:
         who = f"stream '{self.stream}'" if self.stream else "a stream"
         return f"{who} did not return within the planning limit ({self.seconds:.1f} s)"
-
-
-class UserCodeError(Failure):
-    """The environment's or the agent's code raised, or returned what the contract rules out
-    (exit 3 in the CLI, like a stream's code).  ``where`` names the method
-    (``environment my_env.World.execute``), ``error`` is the exception (None: a wrong answer,
-    said in ``message``); ``result`` is the episode up to there (set by :func:`run_policy`:
-    its cycles, its reason, the goal judged in the true state if that still answers)."""
-
-    def __init__(self, where: str, error: BaseException | None = None, message: str = ""):
-        if error is not None:
-            message = f"{where} raised {type(error).__name__}: {error}{_origin(error)}"
-        super().__init__(where, f"{message or where}")
-        self.where, self.error = where, error
-        self.result: EpisodeResult | None = None
-
-    def __str__(self) -> str:
-        return f"ssr-compile: the user's code failed: {self.message}"
-
-
-def _origin(error: BaseException) -> str:
-    """`` (file:line)`` of the innermost frame of ``error``'s traceback (where it was raised)."""
-    if isinstance(error, SyntaxError) and error.filename:
-        return f" ({error.filename}:{error.lineno})"
-    tb = error.__traceback__
-    if tb is None:
-        return ""
-    while tb.tb_next is not None:
-        tb = tb.tb_next
-    return f" ({tb.tb_frame.f_code.co_filename}:{tb.tb_lineno})"
-
-
-def where(role: str, obj: Any, method: str) -> str:
-    """``role module.Class.method``: the user's method, for messages."""
-    kind = type(obj)
-    return f"{role} {kind.__module__}.{kind.__qualname__}.{method}"
-
-
-def failed(observation: Any) -> bool:
-    """Did the environment report that the action failed?  An observation says so with ``ok``
-    false: a mapping's ``"ok"`` key or an object's ``ok`` attribute (``False``, ``0``,
-    ``numpy.False_``); without ``ok`` (or ``None``, or no observation) the action succeeded."""
-    if observation is None:
-        return False
-    if isinstance(observation, Mapping):
-        ok = observation.get("ok", True)
-    else:
-        ok = getattr(observation, "ok", True)
-    if ok is None:
-        return False
-    try:
-        return not bool(ok)
-    except Exception as e:  # noqa: BLE001 - e.g. a numpy array: not a truth value
-        raise UserCodeError(
-            "environment", message=f"the observation's ok must be true or false, got {ok!r}"
-        ) from e
-
-
-def failure_text(observation: Any) -> str:
-    """What a failed observation says: its ``message`` (key or attribute), else its text."""
-    if isinstance(observation, Mapping):
-        message = observation.get("message")
-    else:
-        message = getattr(observation, "message", None)
-    return str(message) if message else str(observation)
 
 
 # ---------------------------------------------------------------- the contract
@@ -265,95 +206,6 @@ class PolicySettings:
     @property
     def defer(self) -> bool:
         return VARIANTS[self.variant][1]
-
-
-@dataclass
-class Cycle:
-    """One cycle of the policy, as logged."""
-
-    index: int
-    action: str | None  # the executed action, None when the plan was empty or none was found
-    constrained: str  # "held", "fell back", "timeout" (constrained attempt ran out) or "-"
-    planning_time: float
-    stream_calls: int
-    planner_calls: int
-    deferred: int  # optimistic results left for a later cycle
-    plan_length: int | None
-    cost: float | None
-    belief: str
-    execution_time: float = 0.0
-    update_time: float = 0.0
-    overhead_time: float = 0.0  # the policy's own time (determinize, constants, bookkeeping)
-    constrained_time: float = 0.0  # planning time of the constrained attempt alone
-    unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
-    comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
-    plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
-    observation: Any = None  # what the environment answered, as JSON data (``to_json``)
-    failed: bool = False  # the execution failed: the observation's ``ok`` false (``failed``)
-    failure: str | None = None  # why it failed: the observation's message, or a limit
-
-    def as_dict(self) -> dict:
-        d = dict(vars(self))
-        for k, v in d.items():
-            if isinstance(v, float):
-                d[k] = round(v, 4) if math.isfinite(v) else None
-        return d
-
-    def said(self) -> str | None:
-        """What the environment answered to a failed execution, for the cycle's line."""
-        if self.failure:
-            return f"FAILED: {self.failure}"
-        return self.observation if isinstance(self.observation, str) else None
-
-    def line(self) -> str:
-        what = self.action if self.action is not None else "(no action)"
-        cost = "-" if self.cost is None else f"{self.cost:g}"
-        return (
-            f"cycle {self.index:3d}  {what:48s}  constrained {self.constrained:9s}  "
-            f"plan {self.plan_length if self.plan_length is not None else '-'} (cost {cost})  "
-            f"planning {self.planning_time:7.3f} s  streams {self.stream_calls:3d}  "
-            f"deferred {self.deferred:2d}  | {self.belief}"
-            + (f"  | {self.said()}" if self.failed and self.said() else "")
-        )
-
-
-@dataclass
-class EpisodeResult:
-    """The outcome: judged on the environment's true state."""
-
-    success: bool  # the goal holds in the true state at the end
-    believed: bool  # the policy reached the goal belief (an empty plan)
-    reason: str  # why the episode ended
-    cycles: list[Cycle]
-    planning_time: float
-    wall_time: float
-
-    @property
-    def constrained_held(self) -> int:
-        return sum(c.constrained == "held" for c in self.cycles)
-
-    @property
-    def fallbacks(self) -> int:
-        return sum(c.constrained in ("fell back", "timeout") for c in self.cycles)
-
-    @property
-    def actions(self) -> list[str]:
-        return [c.action for c in self.cycles if c.action is not None]
-
-    def as_dict(self) -> dict:
-        return {
-            "success": self.success,
-            "believed": self.believed,
-            "reason": self.reason,
-            "cycles": len(self.cycles),
-            "actions": len(self.actions),
-            "planning_time": round(self.planning_time, 4),
-            "wall_time": round(self.wall_time, 4),
-            "constrained_held": self.constrained_held,
-            "fallbacks": self.fallbacks,
-            "stream_calls": sum(c.stream_calls for c in self.cycles),
-            "planner_calls": sum(c.planner_calls for c in self.cycles),
-        }
 
 
 # ---------------------------------------------------------------- Algorithm 1
@@ -843,15 +695,3 @@ def _fingerprint(problem: S.Problem, module: StreamsModule) -> Any:
         str(problem.goal),
         hashlib.sha256(values).hexdigest(),
     )
-
-
-def summarize(results: Iterable[EpisodeResult]) -> dict:
-    """Success rate and mean planning time of the successful episodes."""
-    results = list(results)
-    ok = [r for r in results if r.success]
-    return {
-        "episodes": len(results),
-        "successes": len(ok),
-        "success_rate": len(ok) / len(results) if results else 0.0,
-        "mean_planning_time": (sum(r.planning_time for r in ok) / len(ok)) if ok else None,
-    }

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from ssr_compile.cli.app import main
-from ssr_compile.policy import PolicySettings, UserCodeError, failed, run_policy
+from ssr_compile.episode_record import UserCodeError, failed
+from ssr_compile.policy import PolicySettings, run_policy
 from ssr_compile.resources import domains_dir
 
 HEADER = """\

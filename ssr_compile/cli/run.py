@@ -152,7 +152,8 @@ def resolve(target: str, problem: str | None):
 
 def make_episode(example, problem: str | None, seed: int):
     """The example's episode from its environment factory; the factory's faults named."""
-    from ..policy import Episode, UserCodeError
+    from ..episode_record import UserCodeError
+    from ..policy import Episode
 
     spec = example.settings.environment
     try:
@@ -194,7 +195,8 @@ def _short(value) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..policy import PolicySettings, UserCodeError, run_policy
+    from ..episode_record import UserCodeError
+    from ..policy import PolicySettings, run_policy
 
     if args.max_cycles < 1:
         raise SSRError("--max-cycles must be at least 1")
