@@ -13,6 +13,7 @@ user's faults enter it.
 from __future__ import annotations
 
 import math
+import sysconfig
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -29,7 +30,7 @@ class UserCodeError(Failure):
 
     def __init__(self, where: str, error: BaseException | None = None, message: str = ""):
         if error is not None:
-            message = f"{where} raised {type(error).__name__}: {error}{_origin(error)}"
+            message = f"{where} raised {type(error).__name__}: {error}{origin(error)}"
         super().__init__(where, f"{message or where}")
         self.where, self.error = where, error
         self.result: EpisodeResult | None = None
@@ -38,16 +39,23 @@ class UserCodeError(Failure):
         return f"ssr-compile: the user's code failed: {self.message}"
 
 
-def _origin(error: BaseException) -> str:
-    """`` (file:line)`` of the innermost frame of ``error``'s traceback (where it was raised)."""
+def origin(error: BaseException) -> str:
+    """`` (file:line)`` where ``error`` was raised: the innermost frame of its traceback outside
+    Python's own and installed libraries (the user's line rather than numpy's), else the
+    innermost frame."""
     if isinstance(error, SyntaxError) and error.filename:
         return f" ({error.filename}:{error.lineno})"
+    frames = []
     tb = error.__traceback__
-    if tb is None:
-        return ""
-    while tb.tb_next is not None:
+    while tb is not None:
+        frames.append((tb.tb_frame.f_code.co_filename, tb.tb_lineno))
         tb = tb.tb_next
-    return f" ({tb.tb_frame.f_code.co_filename}:{tb.tb_lineno})"
+    if not frames:
+        return ""
+    libraries = tuple({sysconfig.get_path(k) for k in ("stdlib", "purelib", "platlib")})
+    own = [f for f in frames if not f[0].startswith(libraries) and not f[0].startswith("<")]
+    file, line = (own or frames)[-1]
+    return f" ({file}:{line})"
 
 
 def where(role: str, obj: Any, method: str) -> str:

@@ -152,7 +152,7 @@ def resolve(target: str, problem: str | None):
 
 def make_episode(example, problem: str | None, seed: int):
     """The example's episode from its environment factory; the factory's faults named."""
-    from ..episode_record import UserCodeError
+    from ..episode_record import UserCodeError, origin
     from ..policy import Episode
 
     spec = example.settings.environment
@@ -163,7 +163,7 @@ def make_episode(example, problem: str | None, seed: int):
     except (Exception, SystemExit) as e:  # the module raised while being imported
         raise SSRError(
             f"the environment module of '{example.name}' ({spec}) failed to import: "
-            f"{type(e).__name__}: {e}",
+            f"{type(e).__name__}: {e}{'' if isinstance(e, SyntaxError) else origin(e)}",
             file=_error_file(e) or str(example.folder / "example.toml"),
             line=getattr(e, "lineno", None) if isinstance(e, SyntaxError) else None,
         ) from None
