@@ -65,10 +65,10 @@ def run(args: argparse.Namespace) -> int:
         if valid is not None:
             against = "the optimistic problem of " if artifact.optimistic else ""
             verdict = "valid" if valid else f"INVALID ({reason})"
-            print(
-                f"{verdict} for {against}{artifact.source.get('problem')} "
-                f"(checked by {validator}'s validator)"
+            checker = {"unified-planning": "unified-planning's validator"}.get(
+                validator, "ssr-compile's plan checker"
             )
+            print(f"{verdict} for {against}{artifact.source.get('problem')} (checked by {checker})")
     if valid is False:
         return 1
     return 0
