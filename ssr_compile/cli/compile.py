@@ -140,9 +140,9 @@ def _configure_compile(p: argparse.ArgumentParser) -> None:
         "--task",
         choices=("auto", "lifted", "ground"),
         default="auto",
-        help="with --for a planner that takes a ground task (up:*, pyperplan): write the lifted "
-        "task where it reads it (auto, the default: no derived predicates, no quantifiers, "
-        "few groundings), or always the lifted or the ground task",
+        help="auto (the default): for a planner that takes a ground task in `plan` (--for up:*, "
+        "pyperplan), the lifted task where it reads it (no derived predicates, no "
+        "quantifiers, few groundings), else the ground task; lifted, ground: always that one",
     )
     p.add_argument(
         "--unit-cost", action="store_true", help="drop action costs (every action costs 1)"
@@ -252,18 +252,19 @@ def _compile_artifact(domain, streams, problem, caps, args):
             leaves=False,
         )  # fmt: skip
 
-    if not caps.ground:
-        return run(caps), "lifted"
-    if args.task == "ground" or (args.task == "auto" and not _liftable(domain, problem)):
-        return run(caps), "ground"
+    ground = replace(caps, ground=True)
+    if args.task == "ground":
+        return run(ground), "ground"
+    if not caps.ground or args.task == "lifted":
+        return run(replace(caps, ground=False)), "lifted"
+    if not _liftable(domain, problem):
+        return run(ground), "ground"
     try:
         compiled = run(replace(caps, ground=False))
     except UnsupportedError:
-        if args.task == "lifted":
-            raise
-        return run(caps), "ground"
-    if args.task == "auto" and _groundings(compiled.domain, compiled.problem) > LIFTED_GROUNDINGS:
-        return run(caps), "ground"
+        return run(ground), "ground"
+    if _groundings(compiled.domain, compiled.problem) > LIFTED_GROUNDINGS:
+        return run(ground), "ground"
     return compiled, "lifted"
 
 
