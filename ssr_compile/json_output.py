@@ -246,6 +246,21 @@ _RUN = {
 }
 
 
+# ``map-plan``: valid and validator are null with --no-validate
+_MAP_PLAN = {
+    "required": ["plan", "valid", "validator", "reason", "domain", "problem", "stream_instances"],
+    "properties": {
+        "plan": _PLAN_RESULT["properties"]["plan"],
+        "valid": {"type": ["boolean", "null"]},
+        "validator": {"enum": ["unified-planning", "ssr-compile", None]},
+        "reason": {"type": ["string", "null"]},
+        "domain": {"type": ["string", "null"]},
+        "problem": {"type": ["string", "null"]},
+        "stream_instances": {"type": "object", "additionalProperties": {"type": "string"}},
+    },
+}
+
+
 def _command(name: str, body: dict) -> dict:
     required = ["schema_version", "command", *body.get("required", [])]
     props = {
@@ -266,7 +281,7 @@ SCHEMA: dict = {
     "required": ["schema_version", "command"],
     "properties": {
         "schema_version": {"const": SCHEMA_VERSION},
-        "command": {"enum": ["solve", "plan", "planners", "run"]},
+        "command": {"enum": ["solve", "plan", "planners", "run", "map-plan"]},
     },
     "allOf": [
         _command(
@@ -294,5 +309,6 @@ SCHEMA: dict = {
             },
         ),
         _command("run", _RUN),
+        _command("map-plan", _MAP_PLAN),
     ],
 }

@@ -60,6 +60,7 @@ def _load_command_modules() -> None:
 
     for module in (
         "ssr_compile.cli.compile",
+        "ssr_compile.cli.map_plan",
         "ssr_compile.cli.solve",
         "ssr_compile.cli.sim",
         "ssr_compile.cli.run",
