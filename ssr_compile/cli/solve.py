@@ -101,8 +101,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
         metavar="N",
         help="a generator whose draw was rejected by a test of the stream plan draws again at "
         "once, up to N times per other draw of the plan the test checks it against (a "
-        "placement among six others: 6N), and one whose draw failed once, before the planner "
-        "is called again (default 2; 0: off); or example.toml's",
+        "placement among six others: 6N; N more for each stream plan the tests rejected "
+        "before), and one whose draw failed once, before the planner is called again "
+        "(default 2; 0: off); or example.toml's",
     )
     p.add_argument(
         "--seed",
