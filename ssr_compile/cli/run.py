@@ -10,8 +10,9 @@ from pathlib import Path
 
 from ..catalog import TASKS as KITCHEN_TASKS
 from ..errors import SSRError
-from ..files import write_atomically
+from ..files import check_output, write_atomically
 from ..json_output import SCHEMA_VERSION
+from .options import seed
 from .registry import register
 
 
@@ -53,7 +54,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--problem", metavar="P", help="which problem of the example (its factory decides)"
     )
-    p.add_argument("--seed", type=_count, default=0, metavar="N", help="episode seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, metavar="N", help="episode seed (default 0)")
     p.add_argument(
         "--variant",
         choices=("both", "constraints", "deferred", "neither"),
@@ -145,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
             raise SSRError(f"--gif {args.gif}: not a regular file", file=args.gif)
         if not gif.parent.is_dir():
             raise SSRError(f"--gif {args.gif}: no folder {gif.parent}", file=args.gif)
+        check_output(gif, "--gif")  # before the episode, not after it
     try:
         episode = factory(problem, args.seed)
     except TypeError as e:

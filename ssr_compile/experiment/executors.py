@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import threading
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -35,8 +36,18 @@ class ProcessExecutor:
 
         ACTIVE.open()
         pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="episode")
+        todo = iter(specs)
+        pending: dict = {}
+
+        def fill() -> None:  # at most `workers` submitted at a time: no future per episode
+            while len(pending) < self.workers:
+                spec = next(todo, None)
+                if spec is None:
+                    return
+                pending[pool.submit(one, spec)] = spec
+
         try:
-            pending = {pool.submit(one, s): s for s in specs}
+            fill()
             while pending:
                 done, _ = wait(list(pending), timeout=0.5, return_when=FIRST_COMPLETED)
                 for fut in done:
@@ -47,6 +58,7 @@ class ProcessExecutor:
                         rec = make_record(spec, HARNESS, f"{type(e).__name__}: {e}", 0.0)
                     if rec is not None:
                         on_result(rec)
+                fill()
         except BaseException:
             stop.set()
             pool.shutdown(wait=False, cancel_futures=True)
@@ -95,11 +107,11 @@ class RayExecutor:
         try:
             limit = self.workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
             remote = ray.remote(num_cpus=1, max_retries=0)(run_isolated)
-            todo = list(specs)
+            todo = deque(specs)
             flight: dict[Any, EpisodeSpec] = {}
             while todo or flight:
                 while todo and len(flight) < limit:
-                    spec = todo.pop(0)
+                    spec = todo.popleft()
                     # logs stay on the node that ran the episode only when it is this one
                     flight[remote.remote(spec, log_dir if not self.address else None)] = spec
                 ready, _ = ray.wait(list(flight), num_returns=1, timeout=0.5)

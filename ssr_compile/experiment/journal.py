@@ -120,7 +120,12 @@ class Journal:
             ) from None
         except OSError as e:
             raise SSRError(f"cannot create the folder: {e.strerror}", file=str(self.dir)) from None
-        self._lock_file = open(self.dir / ".lock", "w")  # noqa: SIM115
+        try:
+            self._lock_file = open(self.dir / ".lock", "w")  # noqa: SIM115
+        except OSError as e:
+            raise SSRError(
+                f"cannot write into the folder: {e.strerror}", file=str(self.dir)
+            ) from None
         try:
             fcntl.flock(self._lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:

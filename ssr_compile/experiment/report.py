@@ -240,7 +240,7 @@ def write_report(
     variant and seed wins -- are written to ``out_dir/episodes.jsonl`` first, so that the
     merged folder is a report of its own; the commands recorded in the sources' tables are
     kept in the new one."""
-    from ..files import write_atomically
+    from ..files import write_atomically, write_files_atomically
 
     out = Path(out_dir)
     if sources:
@@ -272,9 +272,20 @@ def write_report(
         old = out / TABLE_FILE
         command = _command_of(old.read_text(encoding="utf-8")) if old.is_file() else None
     text = render_table(records, command)
-    write_atomically(out / TABLE_FILE, text)
-    render_plot(records, out / PLOT_FILE)
+    write_files_atomically(
+        {out / TABLE_FILE: text, out / PLOT_FILE: lambda tmp: render_plot(records, tmp)}
+    )
     return out / TABLE_FILE, out / PLOT_FILE, text
+
+
+def check_report_outputs(out_dir: str | Path, option: str = "-o", journal: bool = False) -> None:
+    """Before the work: the report's files (and, with ``journal``, a merge's episodes.jsonl)
+    can be written into ``out_dir``."""
+    from ..files import check_output
+
+    names = ([EPISODES_FILE] if journal else []) + [TABLE_FILE, PLOT_FILE]
+    for name in names:
+        check_output(Path(out_dir) / name, option)
 
 
 def _records_of(folder: Path) -> list[dict]:
