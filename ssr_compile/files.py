@@ -166,7 +166,8 @@ def _make_parent(path: Path) -> None:
         ) from None
 
 
-def _umask() -> int:
+def current_umask() -> int:
+    """The process's umask (read without changing it where /proc tells it)."""
     try:
         with open("/proc/self/status", encoding="ascii") as f:
             for line in f:
@@ -184,7 +185,7 @@ def _mode_for(path: Path) -> int:
     try:
         return stat.S_IMODE(os.stat(path).st_mode)
     except FileNotFoundError:
-        return 0o666 & ~_umask()
+        return 0o666 & ~current_umask()
 
 
 def _backup(path: Path) -> str | None:
