@@ -342,6 +342,56 @@ def test_a_stopped_sweep_leaves_no_temporary_folders(tmp_path, how):
         shutil.rmtree(tmpdir, ignore_errors=True)
 
 
+def test_the_folder_of_a_killed_sweep_is_removed_by_the_next(tmp_path, monkeypatch):
+    from ssr_compile.experiment import sweep as sweep_module
+
+    tmpdir = Path(tempfile.mkdtemp(prefix="ssr-t-"))
+    seed = 930_000 + os.getpid() % 10_000
+    pids = _pid_file(seed)
+    pids.unlink(missing_ok=True)
+    sweep = _sweep_process(
+        tmpdir, tmp_path / "out", f"{FIXTURE}:tmp-hang", "--seeds", str(seed), "--wall-limit", "300"
+    )
+    try:
+        for _ in range(300):
+            if pids.exists() and len(pids.read_text().split()) == 2:
+                break
+            time.sleep(0.1)
+        helper = int(pids.read_text().split()[1])
+        sweep.kill()  # SIGKILL: nothing of the sweep's own runs
+        sweep.wait(30)
+        try:
+            os.kill(helper, signal.SIGKILL)  # in a session of its own: out of the sweep's reach
+        except ProcessLookupError:
+            pass
+        left = [p.name for p in tmpdir.glob("ssr-sweep-*")]
+        assert len(left) == 1
+        monkeypatch.setattr(tempfile, "tempdir", str(tmpdir))
+        sweep_module._remove_stale_tmp_roots(min_age=0)  # as the next sweep starts
+        assert list(tmpdir.glob("ssr-sweep-*")) == []
+    finally:
+        if sweep.poll() is None:
+            sweep.kill()
+        pids.unlink(missing_ok=True)
+        import shutil
+
+        shutil.rmtree(tmpdir, ignore_errors=True)
+
+
+def test_a_running_sweeps_folder_is_not_removed(tmp_path, monkeypatch):
+    from ssr_compile.experiment import sweep as sweep_module
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    root, fd = sweep_module._make_tmp_root()
+    try:
+        sweep_module._remove_stale_tmp_roots(min_age=0)
+        assert Path(root).is_dir()
+    finally:
+        os.close(fd)
+    sweep_module._remove_stale_tmp_roots(min_age=0)
+    assert not Path(root).exists()
+
+
 def test_a_ray_sweep_leaves_no_temporary_folders(tmp_path):
     pytest.importorskip("ray", reason="Ray is not installed (pip install 'ssr-compile[ray]')")
     tmpdir = Path(tempfile.mkdtemp(prefix="ssr-t-"))  # short: Ray's sockets are in it

@@ -3,6 +3,7 @@ it finishes, with a progress bar; the same sweep run again resumes."""
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import sys
@@ -105,7 +106,7 @@ def run_sweep(
         # The episodes' temporary folders (their planners', the robot's files), and a local
         # Ray's, go into one folder of the sweep's, removed however the sweep ends (an
         # interrupted sweep kills its episodes before they could remove their own).
-        tmp_root = tempfile.mkdtemp(prefix="ssr-sweep-") if todo else None
+        tmp_root, tmp_lock = _make_tmp_root() if todo else (None, None)
         try:
             if todo:
                 # The commit of the code the episodes run: read now, as the fork server loads
@@ -118,7 +119,41 @@ def run_sweep(
                 bar.close()
             if tmp_root:
                 _remove_folder(tmp_root)
+                os.close(tmp_lock)
     return SweepOutcome(ran, skipped, ok, records)
+
+
+_TMP_PREFIX = "ssr-sweep-"
+_TMP_LOCK = ".sweep.lock"
+
+
+def _make_tmp_root() -> tuple[str, int]:
+    """A temporary folder for the sweep, locked while the sweep runs; first, the folders of
+    sweeps that were killed (SIGKILL, the kernel's out-of-memory killer) are removed: their
+    locks are free."""
+    _remove_stale_tmp_roots()
+    root = tempfile.mkdtemp(prefix=_TMP_PREFIX)
+    fd = os.open(os.path.join(root, _TMP_LOCK), os.O_WRONLY | os.O_CREAT, 0o600)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    return root, fd
+
+
+def _remove_stale_tmp_roots(min_age: float = 60.0) -> None:
+    for folder in Path(tempfile.gettempdir()).glob(_TMP_PREFIX + "*"):
+        try:
+            if time.time() - folder.stat().st_mtime < min_age:
+                continue  # perhaps a sweep that is just starting
+            fd = os.open(folder / _TMP_LOCK, os.O_WRONLY)
+        except OSError:
+            continue  # not a sweep's folder, or not ours to open
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            continue  # a sweep that runs
+        else:
+            shutil.rmtree(folder, ignore_errors=True)
+        finally:
+            os.close(fd)
 
 
 def _remove_folder(folder: str) -> None:
