@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from . import syntax as S
+from .catalog import SEED_MAX
 from .errors import SSRError
 
 try:  # Python 3.11+
@@ -132,7 +133,7 @@ def _check_value(key: str, value: Any, folder: Path | None) -> Any:
         if not _is_int(value) or value < 0:
             raise ValueError(f"expected {KEYS[key]}")
     elif key == "seed":
-        if not _is_int(value) or not 0 <= value < 2**32:
+        if not _is_int(value) or not 0 <= value <= SEED_MAX:
             raise ValueError(f"expected {KEYS[key]}")
     elif key == "defer":
         if not isinstance(value, bool):

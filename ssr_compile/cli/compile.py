@@ -11,7 +11,7 @@ from pathlib import Path
 from .. import limits
 from .. import syntax as S
 from ..errors import PlannerFailure, SSRError
-from ..files import write_files_atomically
+from ..files import check_output, write_files_atomically
 from ..inputs import load_inputs
 from ..json_output import document, dumps
 from . import options
@@ -165,9 +165,12 @@ def _run_compile(args: argparse.Namespace) -> int:
     from ..printer import to_text
 
     warnings: list[str] = []
+    out = Path(args.output)
+    names = ("domain.pddl", "problem.pddl", "objects.json") if args.problem else ("domain.pddl",)
+    for name in names:
+        check_output(out / name, "-o")  # before the work, not after it
     domain, streams, problem = load_inputs(args.domain, args.stream, args.problem, warnings)
     caps = _caps_for(args.backend)
-    out = Path(args.output)
     files: dict[str, str] = {}
     if problem is None:
         # Domain level: derived predicates and cost functions, no stream instances.

@@ -11,9 +11,9 @@ from pathlib import Path
 
 from ..catalog import TASKS as KITCHEN_TASKS
 from ..errors import SSRError
-from ..files import write_atomically
+from ..files import check_output, write_atomically
 from ..json_output import SCHEMA_VERSION
-from .options import cost_bound, positive_count, seconds
+from .options import cost_bound, positive_count, seconds, seed
 from .registry import register
 
 
@@ -63,7 +63,7 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "--problem", metavar="P", help="which problem of the example (its factory decides)"
     )
     p.add_argument(
-        "--seed", type=_count, metavar="N", help="episode seed (default 0, or example.toml's)"
+        "--seed", type=seed, metavar="N", help="episode seed (default 0, or example.toml's)"
     )
     p.add_argument(
         "--variant",
@@ -244,6 +244,7 @@ def run(args: argparse.Namespace) -> int:
             raise SSRError(f"--gif {args.gif}: not a regular file", file=args.gif)
         if not gif.parent.is_dir():
             raise SSRError(f"--gif {args.gif}: no folder {gif.parent}", file=args.gif)
+        check_output(gif, "--gif")  # before the episode, not after it
     try:
         episode = make_episode(example, problem, args.seed)
     except BaseException:

@@ -29,34 +29,6 @@ class Task:
         return task_title(self.label)
 
 
-def parse_seeds(text: str) -> list[int]:
-    """``0-24``, ``0,3,5``, ``0-4,10-12`` -> the seeds in order, without repeats."""
-    seeds: list[int] = []
-    if not text.strip():
-        raise SSRError("--seeds: empty; expected a range such as 0-24 or a list such as 0,3,5")
-    for part in text.split(","):
-        part = part.strip()
-        lo, dash, hi = part.partition("-")
-        try:
-            if dash:
-                a, b = int(lo), int(hi)
-            else:
-                a = b = int(part)
-        except ValueError:
-            raise SSRError(
-                f"--seeds: '{part}' is not a seed or a range of seeds "
-                "(expected e.g. 0-24 or 0,3,5; seeds are whole numbers >= 0)"
-            ) from None
-        if a < 0 or b < 0:
-            raise SSRError(f"--seeds: '{part}': seeds are whole numbers >= 0")
-        if b < a:
-            raise SSRError(f"--seeds: '{part}' is an empty range (its end is below its start)")
-        if b >= 2**32:
-            raise SSRError(f"--seeds: '{part}': seeds are below 2**32")
-        seeds.extend(s for s in range(a, b + 1) if s not in seeds)
-    return seeds
-
-
 def parse_variants(text: str) -> list[str]:
     names = [v.strip().lower() for v in text.split(",") if v.strip()]
     if not names:
