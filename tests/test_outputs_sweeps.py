@@ -112,6 +112,14 @@ def test_run_gif_into_a_folder_that_cannot_be_written_fails_before_the_episode(
     assert drawing_progress == []  # no episode was run only to lose its outcome
 
 
+def test_a_bad_gif_leaves_an_existing_log_untouched(unwritable, drawing_progress, tmp_path):
+    log = tmp_path / "episode.jsonl"
+    log.write_text('{"index": 1}\n')
+    out = unwritable / "episode.gif"
+    assert run_cli(["run", "progress", "--log", str(log), "--gif", str(out)]) == 2
+    assert log.read_text() == '{"index": 1}\n'  # checked before the log was opened
+
+
 def test_render_and_belief_plot_check_the_output_before_drawing(unwritable, monkeypatch, capsys):
     import ssr_compile.sim.render as render
     import ssr_compile.sim.tasks as tasks

@@ -229,6 +229,14 @@ def run(args: argparse.Namespace) -> int:
     from ..planners import get_planner
 
     get_planner(args.planner)  # bad input before anything runs
+    # Every output is checked before any is opened: a bad --gif leaves no empty --log.
+    gif = Path(args.gif) if args.gif else None
+    if gif is not None:
+        if gif.exists() and not gif.is_file():
+            raise SSRError(f"--gif {args.gif}: not a regular file", file=args.gif)
+        if not gif.parent.is_dir():
+            raise SSRError(f"--gif {args.gif}: no folder {gif.parent}", file=args.gif)
+        check_output(gif, "--gif")  # before the episode, not after it
     log_file = None
     if args.log:
         log_path = Path(args.log)
@@ -238,13 +246,6 @@ def run(args: argparse.Namespace) -> int:
             log_file = open(log_path, "w", encoding="utf-8")  # noqa: SIM115
         except OSError as e:
             raise SSRError(f"--log {args.log}: {e.strerror}", file=args.log) from None
-    gif = Path(args.gif) if args.gif else None
-    if gif is not None:
-        if gif.exists() and not gif.is_file():
-            raise SSRError(f"--gif {args.gif}: not a regular file", file=args.gif)
-        if not gif.parent.is_dir():
-            raise SSRError(f"--gif {args.gif}: no folder {gif.parent}", file=args.gif)
-        check_output(gif, "--gif")  # before the episode, not after it
     try:
         episode = make_episode(example, problem, args.seed)
     except BaseException:
