@@ -1,12 +1,13 @@
-"""The README's "Writing an environment" section is a complete environment: its files, copied
-from the README into a folder of their own, run with ``ssr-compile run FOLDER``; and the
-README and ``run --help`` name every exit code ``run`` returns."""
+"""The README's "Writing an environment" section is a complete environment: its files are the
+shipped example ``domains/pddl/doors/`` word for word, and that folder, copied to a folder of
+the user's own, runs with ``ssr-compile run FOLDER``; and the README and ``run --help`` name
+every exit code ``run`` returns."""
 
 from __future__ import annotations
 
 import json
-import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -34,26 +35,34 @@ def readme_files() -> dict[str, str]:
     return files
 
 
-@pytest.fixture(scope="module")
-def doors(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("copied") / "doors"
-    folder.mkdir()
+def test_the_readme_shows_the_shipped_example_word_for_word():
+    from ssr_compile.resources import domains_dir
+
     files = readme_files()
     assert set(files) == {"domain.pddl", "stream.pddl", "example.toml", "doors_env.py"}
+    shipped = domains_dir() / "doors"
+    assert sorted(p.name for p in shipped.iterdir() if p.is_file()) == sorted(files)
     for name, text in files.items():
-        (folder / name).write_text(text, encoding="utf-8")
+        assert (shipped / name).read_text(encoding="utf-8") == text, name
     assert "..." not in files["doors_env.py"]  # complete, problem() included
+
+
+@pytest.fixture(scope="module")
+def doors(tmp_path_factory) -> Path:
+    """The shipped folder copied to a folder of the user's own, as the README says."""
+    from ssr_compile.resources import domains_dir
+
+    folder = tmp_path_factory.mktemp("copied") / "doors"
+    shutil.copytree(domains_dir() / "doors", folder, ignore=shutil.ignore_patterns("__pycache__"))
     return folder
 
 
 def run(folder: Path, *args: str) -> subprocess.CompletedProcess:
-    # The folder's module is put on the path here, as the user would (PYTHONPATH).
-    env = {**os.environ, "PYTHONPATH": str(folder)}
+    # No PYTHONPATH: the folder is self-contained, its module imports from it.
     return subprocess.run(
         [sys.executable, "-m", "ssr_compile.cli", "run", str(folder), *args],
         capture_output=True,
         text=True,
-        env=env,
         cwd=folder.parent,
         timeout=300,
     )
