@@ -57,6 +57,10 @@ class Result:
     level: int
     optimistic: bool = True
     value: float | None = None  # for functions
+    # A real result's complexity (PDDLStream's): the largest of its domain facts' plus the
+    # number of draws its instance had made before it, plus one; the solver shows the planner
+    # only the real results whose complexity is at most the level
+    complexity: int = 0
 
 
 @dataclass
@@ -121,6 +125,7 @@ def instantiate(
     real_function_values: Mapping[S.FuncTerm, float] | None = None,
     exhausted: Iterable[Instance] = (),
     share: bool = False,
+    fact_levels: Mapping[S.Atom, int] | None = None,
 ) -> Instantiation:
     """Optimistically instantiate ``streams`` over ``problem`` up to ``level``.
 
@@ -134,7 +139,9 @@ def instantiate(
     ``disabled`` instances are not instantiated optimistically (they failed at this level);
     ``exhausted`` instances have no more outputs (their real results stay, no optimistic one
     is added); ``function_values`` maps a function name to its optimistic value;
-    ``real_function_values`` gives evaluated function terms their real value.
+    ``real_function_values`` gives evaluated function terms their real value;
+    ``fact_levels``: the level of facts of ``evaluated`` results (the solver's complexity of
+    the values drawn: an instance over them is made that much deeper; absent: level 0).
     """
     refuse_unsupported(streams)
     disabled = set(disabled) | set(exhausted)
@@ -160,9 +167,10 @@ def instantiate(
     evaluated = list(evaluated)
     real_objects: list[S.Typed] = []
     known = set(taken)
+    fact_levels = fact_levels or {}
     for res in evaluated:
         for atom in res.certified:
-            add_fact(atom, 0)
+            add_fact(atom, fact_levels.get(atom, 0))
             for a in atom.args:
                 if a.name not in known:
                     known.add(a.name)

@@ -30,12 +30,16 @@ from .evaluation import bound_result, real_problem
 from .loop import SolverLoop
 from .plan_evaluation import DrawMemory, StreamPlanEvaluation
 from .preimage import PlanInvalid, plan_preimage
+from ..compile.instantiate import Result
 from .results import SOLVED, Solution, plan_steps
 
 # A planner call on a level with instances held back: at most SLICE_FACTOR times the longest
 # call that found a plan, and at least SLICE_MIN seconds (:meth:`FocusedLoop.plan`)
 SLICE_FACTOR = 10.0
 SLICE_MIN = 1.0
+# Planner calls after the incumbent was last replaced (with a planner that is not
+# cost-optimal) before it is the solution (:meth:`FocusedLoop.run`)
+IMPROVEMENTS = 2
 
 
 class FocusedLoop(SolverLoop):
@@ -55,6 +59,25 @@ class FocusedLoop(SolverLoop):
         # the cheapest plan so far whose stream plan all succeeded (with its values drawn),
         # kept when not taken at once (``accept_drawn`` off): see :meth:`use_plan`
         self.incumbent: Solution | None = None
+        self.since_incumbent = 0  # planner calls since the incumbent was last replaced
+
+    def visible_results(self) -> list[Result]:
+        """The real results whose complexity is at most the level, and those inherited from
+        earlier calls (PDDLStream's complexity-bounded instantiation): an instance's k-th
+        value waits k - 1 levels past its inputs' before the planner sees it.  Otherwise the
+        values a failed stream plan drew (a redraw budget's worth) all reach the next
+        optimistic problem at once, with every pair of them an optimistic test the planner
+        then tries one planner call at a time."""
+        results, level = self.ev.results, self.level
+        return results[: self.inherited] + [
+            r for r in results[self.inherited :] if r.complexity <= level
+        ]
+
+    def fact_levels(self):
+        """Real facts sit at the level of their complexity: an optimistic test over two
+        placements drawn third is made at level 4, not 1 (the planner would otherwise try
+        each pair of the values it sees, a planner call per pair)."""
+        return self.ev.fact_complexity
 
     def run(self) -> Solution:
         """Compile, plan, evaluate the stream plan; until a plan's facts are all real, no plan
@@ -72,6 +95,13 @@ class FocusedLoop(SolverLoop):
                     message=f"time limit of {self.time_limit:g} s reached (too little left to "
                     f"compile the next problem, {self.last_compile:.1f} s last time)",
                 )
+            if self.incumbent is not None and self.since_incumbent >= IMPROVEMENTS:
+                # Each planner call after it found a plan whose optimistic cost is lower (the
+                # costs not evaluated yet planned at the least seen), and whose stream plan then
+                # failed: continuous_tamp tested one more pair of placements per call, on
+                # seed 0 of two blocks five calls long, for no cheaper plan.
+                self.say(f"  no cheaper plan in {IMPROVEMENTS} planner calls: the incumbent")
+                return self.finish_incumbent()
             self.stats.iterations += 1
             self.stats.levels.append(self.level)
             self.evaluate_cheap_functions()
@@ -80,6 +110,8 @@ class FocusedLoop(SolverLoop):
             except InstanceCapReached as e:
                 return self.capped(e)
             result, bound = self.plan(compiled)
+            if self.incumbent is not None:
+                self.since_incumbent += 1
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)
             if result.status == "timeout" and self.sliced:
@@ -234,7 +266,7 @@ class FocusedLoop(SolverLoop):
             if found is not None:
                 # cheaper than any kept before (a plan no cheaper was not evaluated, above);
                 # a suboptimal planner may still find a cheaper one
-                self.incumbent = found
+                self.incumbent, self.since_incumbent = found, 0
         return None
 
     def bound_solution(self, compiled, plan, inst, binding, later=()) -> Solution | None:
@@ -284,7 +316,7 @@ class FocusedLoop(SolverLoop):
                 f"  the plan holds with the values drawn but costs {cost:g} "
                 f"(planned {planned:g}): kept, planning again"
             )
-            self.incumbent = drawn
+            self.incumbent, self.since_incumbent = drawn, 0
             return None
         self.say(
             "  the plan holds with the values drawn"

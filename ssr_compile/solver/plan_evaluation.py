@@ -167,6 +167,11 @@ class StreamPlanEvaluation:
             failed_facts.update(res.certified)
             self.say(f"  {res.instance} failed")
             self._blame(res, redraw)
+            if redraw:
+                # A draw is taken again: the rest waits for the next pass, over the new
+                # value (continuous_tamp: the inverse kinematics and motions of a placement a
+                # test had just rejected were computed for every rejected placement)
+                break
         return all_ok, redraw
 
     def _evaluate(self, res: Result) -> bool:
