@@ -22,6 +22,7 @@ import math
 import time
 from dataclasses import replace
 
+from ..compile.instantiate import Result
 from ..errors import InstanceCapReached, PlannerFailure, SSRError
 from ..planners.base import UNSOLVABLE
 from ..planners.costs import plan_cost
@@ -30,7 +31,6 @@ from .evaluation import bound_result, real_problem
 from .loop import SolverLoop
 from .plan_evaluation import DrawMemory, StreamPlanEvaluation
 from .preimage import PlanInvalid, plan_preimage
-from ..compile.instantiate import Result
 from .results import SOLVED, Solution, plan_steps
 
 # A planner call on a level with instances held back: at most SLICE_FACTOR times the longest
