@@ -9,7 +9,7 @@ corpus (``../shared/corpus`` or ``$SSR_CORPUS``, then ``pddlstream-examples/exam
 the script stops with a message when it is absent.  Figures, no assertions; each solve runs in
 this process, one at a time.
 
-Run: python bench/pddlstream_examples.py [--seeds 0-9] [--only NAME ...] [--time-limit S]
+Run: python bench/pddlstream_examples.py [--seeds 0-9 | --full] [--only NAME ...] [--time-limit S]
      [--algorithm NAME] [--option KEY=VALUE ...] [--json OUT]
 """
 
@@ -108,7 +108,8 @@ HEADER = (
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="0-9")
+    ap.add_argument("--seeds", default=None, help="seeds, e.g. 0-9 (default 0-9; --full: 0-24)")
+    ap.add_argument("--full", action="store_true", help="the long version: seeds 0-24")
     ap.add_argument("--only", action="append", default=[], help="a problem name, e.g. tight(2)")
     ap.add_argument("--time-limit", type=float, default=60.0)
     ap.add_argument("--algorithm", default=None)
@@ -121,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
     options = dict(parse_option(o) for o in args.option)
     if args.algorithm:
         options["algorithm"] = args.algorithm
-    seeds = parse_seeds(args.seeds)
+    seeds = parse_seeds(args.seeds or ("0-24" if args.full else "0-9"))
     rows = []
     print(HEADER, flush=True)
     for sub, problems, make, check in EXAMPLES.values():

@@ -39,7 +39,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ssr_compile.experiment import parse_seeds  # noqa: E402
+from ssr_compile.cli.options import seed_list  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
 from ssr_compile.solver import SolveOptions, solve  # noqa: E402
 from ssr_compile.stream import module_for_problem  # noqa: E402
@@ -221,7 +221,7 @@ def main() -> None:
     args = ap.parse_args()
     if args.one_run:
         return _one_run(args.one_run)
-    seeds = parse_seeds(args.seeds)
+    seeds = seed_list(args.seeds)
     options = {}
     for o in args.option:
         key, _, value = o.partition("=")

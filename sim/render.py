@@ -9,13 +9,14 @@ from __future__ import annotations
 import numpy as np
 import pybullet as p
 
+from ssr_compile.belief.colors import object_colors
+
 from .tasks import make_task
 from .world import World
 
 WIDTH, HEIGHT = 640, 480
 TOP_EYE = (0.45, 0.0, 4.0)
 TOP_TARGET = (0.45, 0.0, 0.0)
-PARTICLE_COLORS = {"block": "lime", "sugar_box": "gold", "cracker_box": "red"}
 
 
 def _matrices(world: World, view: str):
@@ -83,9 +84,11 @@ def render_task(task_name: str, seed: int, path: str, view: str = "camera") -> s
         ax.imshow(img)
         ax.set_axis_off()
         if view == "top":
-            for obj, pts in prior_particles(task, np.random.default_rng(seed)).items():
+            particles = prior_particles(task, np.random.default_rng(seed))
+            colors = object_colors(particles)  # as belief-plot and run --gif colour them
+            for obj, pts in particles.items():
                 uv = project(task.world, pts, view)
-                ax.scatter(uv[:, 0], uv[:, 1], s=6, c=PARTICLE_COLORS.get(obj, "blue"), label=obj)
+                ax.scatter(uv[:, 0], uv[:, 1], s=6, c=colors[obj], label=obj)
             ax.legend(loc="lower left", fontsize=7)
         from ssr_compile.printer import to_text
 

@@ -1,5 +1,6 @@
 """The names of Table I (paper §VIII): the kitchen's tasks (its rows) and the policy's variants
-(its columns), defined here once for the simulator, the policy, the CLI and the sweep.
+(its columns), defined here once for the simulator, the policy, the CLI and the sweep; and the
+range of a seed, the same for every command.
 
 Imports nothing, so that naming a task or a variant does not load PyBullet or the solver.
 """
@@ -18,4 +19,8 @@ VARIANTS: dict[str, tuple[bool, bool]] = {
     "both": (True, True),
 }
 
-__all__ = ["TASKS", "VARIANTS"]
+# A seed, for every command and example.toml: a whole number from 0 to 2**32 - 1 (the rule
+# and its reason: ``ssr_compile.cli.options.SEED_RULE``).
+SEED_MAX = 2**32 - 1
+
+__all__ = ["SEED_MAX", "TASKS", "VARIANTS"]

@@ -442,6 +442,13 @@ def check_problem(
                 "problem's :objects declare",
                 problem.span,
             )
+    for name, span in undeclared_stream_names(streams, domain).items() if streams else ():
+        if name not in objects:
+            report.error(
+                f"the stream file uses '{name}' (at {span}), which neither the domain's "
+                ":constants nor this problem's :objects declare",
+                problem.span,
+            )
     for o in problem.objects:
         fc.type_ref(o.type, o.span, "the :objects section")
     for fact in problem.init:
@@ -477,8 +484,12 @@ def check_streams(
         types=declared.types if declared else set(),
     )
     arities: dict[str, tuple[int, S.Span | None]] = {}
-    # Constants can only be judged against a domain.
+    # Constants can only be judged against a domain.  A name the domain does not declare is
+    # a warning, as in the domain itself: the paper's (Conf base ?bq) names a problem object
+    # (the problem's check says whether it declares it).
     fc = _FormulaChecker(report, vocab, constants_known=declared is not None)
+    if declared is not None:
+        fc.domain_names = {}
 
     def consistent(formula, where):
         for a in atoms(formula):
@@ -588,6 +599,24 @@ def undeclared_domain_names(domain: S.Domain) -> dict[str, S.Span | None]:
         fc.formula(a.effect, scope, "an effect")
     for ax in domain.axioms:
         fc.formula(ax.body, frozenset(p.name for p in ax.parameters), "an axiom")
+    return fc.domain_names
+
+
+def undeclared_stream_names(streams: S.StreamFile, domain: S.Domain) -> dict[str, S.Span | None]:
+    """Names a stream file's formulas use that the domain does not declare as constants (->
+    first use): they must be objects of the problem."""
+    fc = _FormulaChecker(Report("<stream>"), Vocabulary.of(domain, streams))
+    fc.domain_names = {}
+    for s in streams.streams:
+        scope = frozenset(p.name for p in (*s.inputs, *s.outputs))
+        fc.formula(s.domain, scope, "a stream")
+        fc.formula(s.certified, scope, "a stream")
+    for r in streams.rules:
+        scope = frozenset(p.name for p in r.inputs)
+        fc.formula(r.domain, scope, "a rule")
+        fc.formula(r.certified, scope, "a rule")
+    for d in (*streams.functions, *streams.predicates):
+        fc.formula(d.domain, frozenset(p.name for p in d.params), "a function")
     return fc.domain_names
 
 

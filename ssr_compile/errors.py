@@ -121,7 +121,8 @@ EXIT_CODES = {
     0: "success",
     1: "no plan within the limits",
     2: "bad input",
-    3: "a planner, a stream's code or ssr-compile failed (not the input's fault)",
+    3: "a planner, a stream's code, an environment's code or ssr-compile failed (not the "
+    "input's fault)",
 }
 
 

@@ -44,8 +44,10 @@ def write_files_atomically(files: Mapping[str | Path, Content]) -> None:
     temps: dict[Path, str] = {}
     backups: dict[Path, str | None] = {}  # path -> hard link to its old content (None: new)
     done: list[Path] = []
+    current = next(iter(files), None)  # the output being written (named by an error)
     try:
         for path, content in files.items():
+            current = path
             _make_parent(path)
             suffix = ".tmp" if isinstance(content, str) else ".tmp" + path.suffix
             fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
@@ -58,9 +60,11 @@ def write_files_atomically(files: Mapping[str | Path, Content]) -> None:
                 content(tmp)
             os.chmod(tmp, _mode_for(path))
         for path in files:
+            current = path
             _refuse_non_regular(path)  # again, just before replacing
             backups[path] = _backup(path)
         for path, tmp in temps.items():
+            current = path
             os.replace(tmp, path)
             done.append(path)
     except BaseException as e:
@@ -80,11 +84,40 @@ def write_files_atomically(files: Mapping[str | Path, Content]) -> None:
             if old is not None:
                 Path(old).unlink(missing_ok=True)
         if isinstance(e, OSError):
-            raise _write_error(e, e.filename or next(iter(files))) from None
+            raise _write_error(e, current) from None
         raise
     for old in backups.values():
         if old is not None:
             Path(old).unlink(missing_ok=True)
+
+
+def check_output(path: str | Path, option: str | None = None) -> None:
+    """Before the work: that :func:`write_atomically` will be able to write ``path``.
+
+    The path must not be a symlink, folder, FIFO or device; the nearest folder above it that
+    exists must be a folder in which a file (or, if folders are missing below it, a folder)
+    can be created -- tried, not guessed from its mode bits, which do not bind root nor tell a
+    read-only filesystem.  An SSRError (exit 2) naming the path and ``option`` otherwise, so
+    that a command never runs its work only to fail at writing its result.
+    """
+    path = Path(path)
+    said = f"{option}: " if option else ""
+    _check_parents(path)
+    _refuse_non_regular(path)
+    folder = next((p for p in path.parents if os.path.lexists(p)), Path("."))
+    try:
+        if folder == path.parent:
+            fd, probe = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".probe")
+            os.close(fd)
+            os.unlink(probe)
+        else:
+            os.rmdir(tempfile.mkdtemp(dir=folder, prefix=".ssr-probe-"))
+    except OSError as e:
+        raise SSRError(
+            f"{said}cannot write into the folder {folder} ({e.strerror or e}); "
+            "choose another output path",
+            file=str(path),
+        ) from None
 
 
 def _refuse_non_regular(path: Path) -> None:
@@ -133,7 +166,8 @@ def _make_parent(path: Path) -> None:
         ) from None
 
 
-def _umask() -> int:
+def current_umask() -> int:
+    """The process's umask (read without changing it where /proc tells it)."""
     try:
         with open("/proc/self/status", encoding="ascii") as f:
             for line in f:
@@ -151,7 +185,7 @@ def _mode_for(path: Path) -> int:
     try:
         return stat.S_IMODE(os.stat(path).st_mode)
     except FileNotFoundError:
-        return 0o666 & ~_umask()
+        return 0o666 & ~current_umask()
 
 
 def _backup(path: Path) -> str | None:

@@ -20,6 +20,8 @@ import json
 import math
 from typing import Any
 
+from .catalog import VARIANTS
+
 SCHEMA_VERSION = 1
 
 #: sequences of sequences longer than this are summarised unless ``full``
@@ -234,12 +236,27 @@ _RUN = {
         "example": {"type": "string"},
         "problem": {"type": ["string", "null"]},
         "seed": {"type": "integer"},
-        "variant": {"enum": ["both", "constraints", "deferred", "neither"]},
+        "variant": {"enum": sorted(VARIANTS)},
         "success": {"type": "boolean"},
         "reason": {"type": "string"},
         "cycles": {"type": "integer"},
         "planning_time": _NUMBER_OR_NONFINITE,
         "trace": {"type": "array", "items": {"type": "object"}},
+    },
+}
+
+
+# ``map-plan``: valid and validator are null with --no-validate
+_MAP_PLAN = {
+    "required": ["plan", "valid", "validator", "reason", "domain", "problem", "stream_instances"],
+    "properties": {
+        "plan": _PLAN_RESULT["properties"]["plan"],
+        "valid": {"type": ["boolean", "null"]},
+        "validator": {"enum": ["unified-planning", "ssr-compile", None]},
+        "reason": {"type": ["string", "null"]},
+        "domain": {"type": ["string", "null"]},
+        "problem": {"type": ["string", "null"]},
+        "stream_instances": {"type": "object", "additionalProperties": {"type": "string"}},
     },
 }
 
@@ -264,7 +281,7 @@ SCHEMA: dict = {
     "required": ["schema_version", "command"],
     "properties": {
         "schema_version": {"const": SCHEMA_VERSION},
-        "command": {"enum": ["solve", "plan", "planners", "run"]},
+        "command": {"enum": ["solve", "plan", "planners", "run", "map-plan"]},
     },
     "allOf": [
         _command(
@@ -292,5 +309,6 @@ SCHEMA: dict = {
             },
         ),
         _command("run", _RUN),
+        _command("map-plan", _MAP_PLAN),
     ],
 }

@@ -22,19 +22,36 @@ later cycle needs them.
 
 The policy never reads the true state: success is judged afterwards by
 :meth:`Environment.goal_holds` on the environment's true state.
+
+The user's code (README, "Writing an environment"; :mod:`ssr_compile.episode_record`): an
+exception of the environment or the agent ends the episode (``UserCodeError``, the cycles so
+far in its ``result``), as do an ``execute`` past ``execute_time`` and an action that failed
+``max_failures`` times from the same problem (the agent learned nothing from its failures).
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
+import pickle
 import time
+from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
 from . import syntax as S
 from .catalog import VARIANTS
+from .episode_record import (
+    Cycle,
+    EpisodeResult,
+    UserCodeError,
+    failed,
+    failure_text,
+    where,
+)
 from .errors import InstanceCapReached, TimeLimitReached
+from .json_output import to_json
 from .limits import overrunning_stream, time_limit
 from .solver import RESAMPLE, ReplanState, Solution, SolveOptions, Statistics, Step, solve
 from .stream import StreamsModule
@@ -138,7 +155,12 @@ class PolicySettings:
     # level cut-off proves nothing (each level retries the samplers that found nothing).
     # Cook seed 1 gave up at level 8 after 40 s of its 600 s budget.
     unconstrained_max_level: int = 12
-    max_cost: float = math.inf  # c*: plans must be cheaper
+    max_cost: float = math.inf  # c*: plans must be cheaper; none is: the episode ends
+    # Of each ``execute`` (and ``observe``, ``goal_holds``): past it the episode ends.
+    execute_time: float = 60.0
+    # An action that failed this many times from the same problem (nothing learned from the
+    # failures: the agent's problem did not change) ends the episode.
+    max_failures: int = 3
     # the solver's draws again at once of a rejected or failed draw (``solve``'s resample)
     resample: int = RESAMPLE
     # Measurement only (bench/policy_bench.py): when a constrained attempt holds, also solve
@@ -150,12 +172,16 @@ class PolicySettings:
             raise ValueError(
                 f"unknown variant '{self.variant}'; expected one of {', '.join(VARIANTS)}"
             )
-        for name in ("budget", "constrained_time", "unconstrained_time"):
+        for name in ("budget", "constrained_time", "unconstrained_time", "execute_time"):
             v = getattr(self, name)
             if not (v > 0 and math.isfinite(v)):
                 raise ValueError(f"{name} must be a positive number of seconds, got {v}")
         if self.max_cycles < 1:
             raise ValueError(f"max_cycles must be at least 1, got {self.max_cycles}")
+        if self.max_failures < 1:
+            raise ValueError(f"max_failures must be at least 1, got {self.max_failures}")
+        if not self.max_cost > 0:
+            raise ValueError(f"max_cost must be a positive number, got {self.max_cost}")
         if self.resample < 0:
             raise ValueError(f"resample must be 0 or more, got {self.resample}")
 
@@ -180,88 +206,6 @@ class PolicySettings:
     @property
     def defer(self) -> bool:
         return VARIANTS[self.variant][1]
-
-
-@dataclass
-class Cycle:
-    """One cycle of the policy, as logged."""
-
-    index: int
-    action: str | None  # the executed action, None when the plan was empty or none was found
-    constrained: str  # "held", "fell back", "timeout" (constrained attempt ran out) or "-"
-    planning_time: float
-    stream_calls: int
-    planner_calls: int
-    deferred: int  # optimistic results left for a later cycle
-    plan_length: int | None
-    cost: float | None
-    belief: str
-    execution_time: float = 0.0
-    update_time: float = 0.0
-    overhead_time: float = 0.0  # the policy's own time (determinize, constants, bookkeeping)
-    constrained_time: float = 0.0  # planning time of the constrained attempt alone
-    unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
-    comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
-    plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
-    observation: str | None = None  # what the environment answered (``str`` of its observation)
-    failed: bool = False  # the environment reported the execution failed (its ``ok`` false)
-
-    def as_dict(self) -> dict:
-        d = dict(vars(self))
-        for k, v in d.items():
-            if isinstance(v, float):
-                d[k] = round(v, 4) if math.isfinite(v) else None
-        return d
-
-    def line(self) -> str:
-        what = self.action if self.action is not None else "(no action)"
-        cost = "-" if self.cost is None else f"{self.cost:g}"
-        return (
-            f"cycle {self.index:3d}  {what:48s}  constrained {self.constrained:9s}  "
-            f"plan {self.plan_length if self.plan_length is not None else '-'} (cost {cost})  "
-            f"planning {self.planning_time:7.3f} s  streams {self.stream_calls:3d}  "
-            f"deferred {self.deferred:2d}  | {self.belief}"
-            + (f"  | {self.observation}" if self.failed and self.observation else "")
-        )
-
-
-@dataclass
-class EpisodeResult:
-    """The outcome: judged on the environment's true state."""
-
-    success: bool  # the goal holds in the true state at the end
-    believed: bool  # the policy reached the goal belief (an empty plan)
-    reason: str  # why the episode ended
-    cycles: list[Cycle]
-    planning_time: float
-    wall_time: float
-
-    @property
-    def constrained_held(self) -> int:
-        return sum(c.constrained == "held" for c in self.cycles)
-
-    @property
-    def fallbacks(self) -> int:
-        return sum(c.constrained in ("fell back", "timeout") for c in self.cycles)
-
-    @property
-    def actions(self) -> list[str]:
-        return [c.action for c in self.cycles if c.action is not None]
-
-    def as_dict(self) -> dict:
-        return {
-            "success": self.success,
-            "believed": self.believed,
-            "reason": self.reason,
-            "cycles": len(self.cycles),
-            "actions": len(self.actions),
-            "planning_time": round(self.planning_time, 4),
-            "wall_time": round(self.wall_time, 4),
-            "constrained_held": self.constrained_held,
-            "fallbacks": self.fallbacks,
-            "stream_calls": sum(c.stream_calls for c in self.cycles),
-            "planner_calls": sum(c.planner_calls for c in self.cycles),
-        }
 
 
 # ---------------------------------------------------------------- Algorithm 1
@@ -333,7 +277,12 @@ def run_policy(
     on_cycle: Callable[[Cycle], None] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> EpisodeResult:
-    """Run Algorithm 1 in ``episode`` until the goal belief, a failure or a limit."""
+    """Run Algorithm 1 in ``episode`` until the goal belief, a failure or a limit.
+
+    Raises :class:`UserCodeError` (its ``result``: the episode so far) when the environment's
+    or the agent's code raises, and ``TypeError`` when ``episode`` is not an :class:`Episode`."""
+    if not isinstance(episode, Episode):
+        raise TypeError(f"run_policy needs an Episode, got {type(episode).__name__}")
     return _Policy(episode, settings or PolicySettings(), on_cycle, progress).run()
 
 
@@ -369,9 +318,31 @@ class _Policy:
         self.cycles: list[Cycle] = []
         self.state = ReplanState()
         self.last_level = settings.initial_level  # the level the plan in use was found at
+        # failed executions: (the problem planned from, the action) -> how often
+        self.failures: Counter = Counter()
+
+    def user(self, role: str, obj: Any, method: str, *args: Any, limit: float | None = None):
+        """Call the environment's or the agent's ``method``: its exception becomes a
+        :class:`UserCodeError` naming it; ``limit``: seconds it may take (``TimeLimitReached``)."""
+        try:
+            with time_limit(limit):
+                return getattr(obj, method)(*args)
+        except (Exception, SystemExit) as e:
+            raise UserCodeError(where(role, obj, method), e) from e
 
     def run(self) -> EpisodeResult:
-        self.agent.update(None, self.env.observe())
+        try:
+            return self.episode()
+        except UserCodeError as e:
+            e.result = self.finish(False, e.message, after_error=True)
+            raise
+
+    def episode(self) -> EpisodeResult:
+        try:
+            first = self.user("environment", self.env, "observe", limit=self.execute_limit)
+        except TimeLimitReached:
+            return self.finish(False, self.hung(where("environment", self.env, "observe")))
+        self.user("agent", self.agent, "update", None, first)
         try:
             for index in range(1, self.settings.max_cycles + 1):
                 ended = self.cycle(_CycleState(index, time.monotonic()))
@@ -382,9 +353,28 @@ class _Policy:
             return self.finish(False, str(e))
         return self.finish(False, f"no goal within {self.settings.max_cycles} cycles")
 
-    def finish(self, believed: bool, reason: str) -> EpisodeResult:
+    @property
+    def execute_limit(self) -> float:
+        return self.settings.execute_time
+
+    def hung(self, what: str) -> str:
+        return f"{what} did not return within the execution limit of {self.execute_limit:g} s"
+
+    def finish(self, believed: bool, reason: str, after_error: bool = False) -> EpisodeResult:
+        """The result, the goal judged in the true state.  After the user's code failed
+        (``after_error``) the goal holds only if ``goal_holds`` still answers so."""
+        success = False
+        try:
+            success = bool(
+                self.user("environment", self.env, "goal_holds", limit=self.execute_limit)
+            )
+        except TimeLimitReached:
+            reason += "; " + self.hung(where("environment", self.env, "goal_holds"))
+        except UserCodeError:
+            if not after_error:
+                raise
         return EpisodeResult(
-            self.env.goal_holds(),
+            success,
             believed,
             reason,
             self.cycles,
@@ -398,7 +388,7 @@ class _Policy:
         settings = self.settings
         if settings.budget - self.planning <= 0:
             return self.finish(False, f"planning budget of {settings.budget:g} s exhausted")
-        problem, module = self.agent.problem()
+        problem, module = self.determinize()
         solution: Solution | None = None
         comparison: float | None = None
         if settings.constraints and self.state.tail:
@@ -423,14 +413,31 @@ class _Policy:
                 if self.planning >= settings.budget
                 else solution.message
             )
+            if math.isfinite(settings.max_cost) and solution.status == "unsolvable":
+                return self.finish(False, f"no plan cheaper than c* = {settings.max_cost:g}: {why}")
             return self.finish(False, f"no plan: {why}")
         if solution.stats.levels:
             self.last_level = solution.stats.levels[-1]
         if not solution.plan:
             self.log(cycle, None, solution)
             return self.finish(True, "goal belief reached")
-        self.act(cycle, problem, module, solution, comparison)
-        return None
+        return self.act(cycle, problem, module, solution, comparison)
+
+    def determinize(self) -> tuple[S.Problem, StreamsModule]:
+        """DETERMINIZE: the agent's problem, checked for its shape."""
+        answer = self.user("agent", self.agent, "problem")
+        if not (
+            isinstance(answer, tuple)
+            and len(answer) == 2
+            and isinstance(answer[0], S.Problem)
+            and isinstance(answer[1], StreamsModule)
+        ):
+            raise UserCodeError(
+                where("agent", self.agent, "problem"),
+                message=f"{where('agent', self.agent, 'problem')} returned "
+                f"{_short(answer)}, not a (Problem, StreamsModule) pair",
+            )
+        return answer
 
     def constrained_attempt(
         self, cycle: _CycleState, problem: S.Problem, module: StreamsModule
@@ -533,12 +540,15 @@ class _Policy:
         module: StreamsModule,
         solution: Solution,
         comparison: float | None,
-    ) -> None:
+    ) -> EpisodeResult | None:
         """EXECUTE the plan's first action, UPDATE the belief, keep ``ConstantFacts(f)`` and
-        the tail for the next cycle, and log the cycle."""
+        the tail for the next cycle, and log the cycle; the episode's result when it ends here
+        (``execute`` hung, or the action failed ``max_failures`` times from this problem)."""
         agent, plan = self.agent, solution.plan
         # ConstantFacts(f) and the tail, before acting (the solution's names are still valid).
-        constants = {o.name for o in problem.objects if agent.is_constant(o.name)}
+        constants = {
+            o.name for o in problem.objects if self.user("agent", agent, "is_constant", o.name)
+        }
         constants |= _stream_constants(solution, module)
         constants |= {n for n in self.state.kept_values}
         kept_facts, kept_values = constant_facts(
@@ -549,10 +559,36 @@ class _Policy:
         tail = [(s.name, tuple(s.args)) for s in plan[1:]]
         step = plan[0]
         before_exec = time.monotonic()
-        observation = self.env.execute(step)
+        executed = {"comparison_time": comparison}  # what the cycle's log says of the action
+        try:
+            observation = self.user(
+                "environment", self.env, "execute", step, limit=self.execute_limit
+            )
+        except (TimeLimitReached, UserCodeError) as e:
+            # The action's cycle is logged (failed) before the episode ends.
+            executed["execution_time"] = time.monotonic() - before_exec
+            if isinstance(e, UserCodeError):
+                self.log(cycle, str(step), solution, **executed, failed=True, failure=e.message)
+                raise
+            why = f"did not return within {self.execute_limit:g} s"
+            self.log(cycle, str(step), solution, **executed, failed=True, failure=why)
+            return self.finish(
+                False, self.hung(f"{where('environment', self.env, 'execute')} of {step}")
+            )
         after_exec = time.monotonic()
-        agent.update(step, observation)
-        after_update = time.monotonic()
+        is_failure = failed(observation)
+        executed.update(
+            execution_time=after_exec - before_exec,
+            observation=to_json(observation),
+            failed=is_failure,
+            failure=failure_text(observation) if is_failure else None,
+        )
+        try:
+            self.user("agent", agent, "update", step, observation)
+        except UserCodeError:
+            self.log(cycle, str(step), solution, **executed)
+            raise
+        executed["update_time"] = time.monotonic() - after_exec
         self.state = ReplanState(
             tail or None,
             frozenset(
@@ -561,16 +597,18 @@ class _Policy:
             kept_facts,
             kept_values,
         )
-        self.log(
-            cycle,
-            str(step),
-            solution,
-            execution_time=after_exec - before_exec,
-            update_time=after_update - after_exec,
-            comparison_time=comparison,
-            observation=None if observation is None else str(observation),
-            failed=getattr(observation, "ok", True) is False,
-        )
+        self.log(cycle, str(step), solution, **executed)
+        if is_failure:
+            key = (_fingerprint(problem, module), _ground(step, problem))
+            self.failures[key] += 1
+            if self.failures[key] >= self.settings.max_failures:
+                return self.finish(
+                    False,
+                    f"{step} failed {self.failures[key]} times from the same state (the "
+                    "agent's problem did not change after its failures: it learned nothing "
+                    "from them)",
+                )
+        return None
 
     def log(self, cycle: _CycleState, action, sol, **timings) -> None:
         """Record this cycle (the policy's own time is what is left of it)."""
@@ -615,7 +653,7 @@ def _record(
         deferred,
         plan_len,
         cost,
-        agent.summary(),
+        _summary(agent),
         constrained_time=spent["c"],
         unconstrained_time=spent["u"],
         plan=plan,
@@ -624,13 +662,36 @@ def _record(
     return record
 
 
-def summarize(results: Iterable[EpisodeResult]) -> dict:
-    """Success rate and mean planning time of the successful episodes."""
-    results = list(results)
-    ok = [r for r in results if r.success]
-    return {
-        "episodes": len(results),
-        "successes": len(ok),
-        "success_rate": len(ok) / len(results) if results else 0.0,
-        "mean_planning_time": (sum(r.planning_time for r in ok) / len(ok)) if ok else None,
-    }
+def _summary(agent: Agent) -> str:
+    try:
+        return str(agent.summary())
+    except (Exception, SystemExit) as e:
+        raise UserCodeError(where("agent", agent, "summary"), e) from e
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 60 else text[:57] + '...'}"
+
+
+def _ground(step: Step, problem: S.Problem) -> str:
+    """The action as far as the problem names it: its arguments that are problem objects, the
+    stream outputs (new names at every solve) as ``*``."""
+    declared = {o.name for o in problem.objects}
+    return " ".join([step.name, *(a if a in declared else "*" for a in step.args)])
+
+
+def _fingerprint(problem: S.Problem, module: StreamsModule) -> Any:
+    """The state a problem describes: its objects, initial facts and goal, and the Python
+    values of its objects (an unpicklable value: a state never seen again)."""
+    names = sorted(o.name for o in problem.objects)
+    try:
+        values = pickle.dumps([(n, module.values.get(n)) for n in names], protocol=4)
+    except Exception:  # noqa: BLE001 - whatever it holds; such a state is never "the same"
+        return object()
+    return (
+        tuple(names),
+        frozenset(map(str, problem.init)),
+        str(problem.goal),
+        hashlib.sha256(values).hexdigest(),
+    )

@@ -9,6 +9,12 @@ A stream declared in a stream file is implemented by a Python callable bound by 
 * test stream (no outputs) — returns a bool;
 * cost function (``:function``) — returns a number (``None`` or infinity: not applicable).
 
+An output value is any Python value but None, an iterator, or a number that is not finite
+(NaN, infinity; also inside tuples, lists, dicts and numpy arrays): such a value, an output
+that is not a tuple, or a value ``return``-ed from a generator function is the stream's
+error (:class:`StreamError`; the solver reports it as the stream's fault, exit 3), raised at
+the draw that produced it.
+
 A *streams module* binds them.  The plain form always works: a Python module (import path or
 file path) with a dict ``STREAMS`` (stream name -> callable), an optional dict ``STREAM_INFO``
 (name -> :class:`StreamInfo` or a dict of its fields) and an optional dict ``VALUES`` (object
@@ -331,7 +337,7 @@ class Generator:
             if self.kind == "function":
                 self.exhausted = True
                 out = self.fn(*self.args)
-                return _as_tuple(out, self.name)
+                return _as_tuple(out, self.name, "returned")
             if self._it is None:
                 produced = self.fn(*self.args)
                 if produced is None:
@@ -342,11 +348,17 @@ class Generator:
                 ):
                     # A callable that returns one tuple behaves as a function stream.
                     self.exhausted = True
-                    return _as_tuple(produced, self.name)
+                    return _as_tuple(produced, self.name, "returned")
                 self._it = iter(produced)
             out = next(self._it)
-        except StopIteration:
+        except StopIteration as e:
             self.exhausted = True
+            if e.value is not None:  # `return x` in a generator function: x is lost
+                raise StreamError(
+                    f"stream '{self.name}' returned {_brief(e.value)} "
+                    f"({type(e.value).__name__}) from its generator, where the value is lost; "
+                    "expected it to yield output tuples (a bare `return` ends it)"
+                ) from None
             return None
         except StreamError:
             raise
@@ -356,17 +368,68 @@ class Generator:
             raise _exited(f"stream '{self.name}'", e) from None
         if out is None:  # a generator may yield None to say "nothing this time"
             return None
-        return _as_tuple(out, self.name)
+        return _as_tuple(out, self.name, "yielded")
 
 
-def _as_tuple(out, name: str) -> tuple | None:
+def _as_tuple(out, name: str, how: str = "produced") -> tuple | None:
+    """A stream's output tuple, its values checked (:func:`bad_value`): anything else is the
+    stream's error, naming the stream, what it produced and what was expected."""
     if out is None:
         return None
     if isinstance(out, list):
         out = tuple(out)
     if not isinstance(out, tuple):
-        raise StreamError(f"stream '{name}' must produce output tuples, got {type(out).__name__}")
+        raise StreamError(
+            f"stream '{name}' {how} {_brief(out)} ({type(out).__name__}); expected a tuple "
+            "of its output values, e.g. (x,) for one output"
+        )
+    for i, value in enumerate(out):
+        wrong = bad_value(value)
+        if wrong:
+            raise StreamError(
+                f"stream '{name}' {how} {_brief(out)}: its output {i + 1} is {wrong}; "
+                "expected a value (finite numbers only, no None, no iterators)"
+            )
     return out
+
+
+def bad_value(value: Any, depth: int = 0) -> str | None:
+    """What makes ``value`` no value a stream may produce, or None when it is one: None, a
+    NaN or an infinity (in a number, a numpy array, or nested in tuples, lists and dicts),
+    or an iterator (to be drawn from, not a value).  Other objects are taken as they are."""
+    if value is None:
+        return "None"
+    kind = type(value)
+    if kind is float:
+        return None if math.isfinite(value) else f"the non-finite number {value}"
+    if kind in (int, bool, str, bytes) or depth > 6:
+        return None
+    if isinstance(value, (tuple, list)):
+        for x in value:
+            wrong = bad_value(x, depth + 1)
+            if wrong:
+                return f"{_brief(value)}, which holds {wrong}"
+        return None
+    if isinstance(value, Mapping):
+        return bad_value(tuple(value.values()), depth)
+    if kind.__module__ == "numpy":
+        return _bad_numpy(value)
+    if isinstance(value, float):  # a float subclass
+        return None if math.isfinite(value) else f"the non-finite number {value}"
+    if isinstance(value, Iterator):
+        return f"an iterator ({kind.__name__})"
+    return None
+
+
+def _bad_numpy(value: Any) -> str | None:
+    np = sys.modules["numpy"]
+    dtype = getattr(value, "dtype", None)
+    if dtype is None or dtype.kind not in "fc":
+        return None
+    if np.all(np.isfinite(value)):
+        return None
+    what = "an array" if getattr(value, "ndim", 0) else "the number"
+    return f"{what} with a non-finite number ({_brief(value)})"
 
 
 def _exited(what: str, e: SystemExit) -> StreamError:
@@ -402,7 +465,8 @@ def call_test(fn: Callable, args: tuple, name: str) -> bool:
 
 
 def call_function(fn: Callable, args: tuple, name: str) -> float | None:
-    """A cost function's value; None, NaN and infinity mean not applicable."""
+    """A cost function's value; None and infinity mean not applicable.  NaN, a negative
+    cost or a value that is not a number (a bool, a string) is an error of the function."""
     try:
         value = fn(*args)
     except Exception as e:
@@ -411,11 +475,24 @@ def call_function(fn: Callable, args: tuple, name: str) -> float | None:
         raise _exited(f"cost function '{name}'", e) from None
     if value is None:
         return None
+    if isinstance(value, (bool, str, bytes)) or (
+        type(value).__module__ == "numpy"
+        and getattr(value, "dtype", None) is not None
+        and value.dtype.kind not in "iuf"
+    ):
+        raise StreamError(
+            f"cost function '{name}' returned {_brief(value)} ({type(value).__name__}), "
+            "expected a number"
+        )
     try:
         value = float(value)
     except (TypeError, ValueError):
         raise StreamError(f"cost function '{name}' returned {value!r}, expected a number") from None
-    if math.isnan(value) or math.isinf(value):
+    if math.isnan(value):
+        raise StreamError(
+            f"cost function '{name}' returned nan, expected a number (None or inf: not applicable)"
+        )
+    if math.isinf(value):
         return None
     if value < 0:
         raise StreamError(f"cost function '{name}' returned the negative cost {value}")

@@ -19,7 +19,8 @@ def test_compile_writes_three_files(tmp_path, capsys, bare):
     out = tmp_path / "out"
     argv = ([] if bare else ["compile"]) + [D, S, P, "-o", str(out), "--level", "2"]
     assert main(argv) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["domain.pddl", "objects.json", "problem.pddl"]
+    names = ["actions.json", "domain.pddl", "objects.json", "problem.pddl"]
+    assert sorted(p.name for p in out.iterdir()) == names
     parse_domain((out / "domain.pddl").read_text())
     problem = parse_problem((out / "problem.pddl").read_text())
     data = json.loads((out / "objects.json").read_text())

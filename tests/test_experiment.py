@@ -360,9 +360,11 @@ def test_report_of_a_folder_without_a_sweep(tmp_path, capsys):
 
 
 def test_seed_lists():
-    assert X.parse_seeds("0-24") == list(range(25))
-    assert X.parse_seeds("0,3,5") == [0, 3, 5]
-    assert X.parse_seeds("4-6, 1, 5") == [4, 5, 6, 1]
+    from ssr_compile.cli.options import seed_list
+
+    assert seed_list("0-24") == list(range(25))
+    assert seed_list("0,3,5") == [0, 3, 5]
+    assert seed_list("4-6, 1, 5") == [4, 5, 6, 1]
 
 
 def test_wilson_interval_known_values():

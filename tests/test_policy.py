@@ -365,7 +365,7 @@ def test_an_unconstrained_attempt_climbs_past_the_constrained_attempts_last_leve
 def test_a_cycle_line_says_what_the_environment_answered_when_the_execution_failed():
     # A sweep's episode logs are its cycle lines: a Cook episode that failed the same motion
     # seven times said nothing of what the world answered.
-    from ssr_compile.policy import Cycle
+    from ssr_compile.episode_record import Cycle
 
     kw = dict(index=3, action="(move-arm bq0 aq0 t-1 aq-carry)", constrained="held",
               planning_time=1.0, stream_calls=2, planner_calls=1, deferred=0, plan_length=4,

@@ -107,7 +107,9 @@ def test_an_internal_error_is_exit_3(monkeypatch, capsys):
 
 
 def test_epilog_documents_exit_3():
-    assert "3 a planner, a stream's code or ssr-compile failed" in build_parser().epilog
+    assert "3 a planner, a stream's code, an environment's code or ssr-compile failed" in " ".join(
+        build_parser().epilog.split()
+    )
 
 
 def test_plan_reports_a_planner_error_as_the_planners_fault(monkeypatch, capsys):

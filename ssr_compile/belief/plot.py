@@ -1,6 +1,6 @@
 """Top-view pictures of pose beliefs, in the style of paper Fig. 3 (left).
 
-One colour per object; a particle's weight (relative to its belief's heaviest) is its opacity
+One colour per object (:mod:`.colors`, as in every picture of the toolkit); a particle's weight (relative to its belief's heaviest) is its opacity
 and size.  Surfaces stacked above one another (the two drawers of the kitchen) would overprint
 in a top view, so the surfaces are split into layers of non-overlapping footprints and each
 layer gets a panel of its own.  Labels (surface names, each object's point estimate) are
@@ -21,13 +21,9 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import to_rgba  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 
+from .colors import object_colors  # noqa: E402
 from .particles import PoseBelief, Surface  # noqa: E402
 
-#: one colour per object (matplotlib's tab10, in order)
-OBJECT_COLORS = [
-    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
-    "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f",
-]  # fmt: skip
 MIN_ALPHA = 0.15
 
 
@@ -65,7 +61,7 @@ def belief_figure(
         1, len(layers), figsize=(5.2 * len(layers) + 1.0, 5.6), dpi=110, squeeze=False
     )
     axes = list(axes[0])
-    colors = {pb.obj: OBJECT_COLORS[k % len(OBJECT_COLORS)] for k, pb in enumerate(beliefs)}
+    colors = object_colors(pb.obj for pb in beliefs)  # as every picture of these objects
     for ax, layer in zip(axes, layers):
         names = {s.name for s in layer}
         for s in layer:

@@ -1,7 +1,8 @@
 """The ``ssr-compile`` command line: its parser, exit codes and error reporting.
 
-Exit codes (README, "Commands"): 0 success, 1 no plan within the limits, 2 bad input (the
-message names file:line:col; never a traceback).  Subcommands register themselves in
+Exit codes (README, "Exit codes"): 0 success, 1 no plan within the limits, 2 bad input (the
+message names file:line:col; never a traceback), 3 a planner's, a stream's, an environment's
+or ssr-compile's own code failed, 128+N killed by signal N.  Subcommands register themselves in
 ``COMMANDS`` (``registry``); heavy imports (planners, PyBullet) happen inside the commands that
 need them, so ``check`` and ``fmt`` start fast.
 """
@@ -33,9 +34,10 @@ def build_parser() -> argparse.ArgumentParser:
         ),
         epilog=(
             "Exit codes: 0 success, 1 no plan within the limits, 2 bad input (the message names "
-            "file:line:col), 3 a planner, a stream's code or ssr-compile failed (not the "
-            "input's fault; the message names the backend or the stream, --debug shows the "
-            "traceback), 128+N killed by signal N."
+            "file:line:col), 3 a planner, a stream's code, an environment's code or "
+            "ssr-compile failed (not the input's fault; the message names the backend, the "
+            "stream or the module and method, --debug shows the traceback), 128+N killed by "
+            "signal N."
         ),
     )
     parser.add_argument("--version", action="version", version=f"ssr-compile {__version__}")
@@ -58,6 +60,7 @@ def _load_command_modules() -> None:
 
     for module in (
         "ssr_compile.cli.compile",
+        "ssr_compile.cli.map_plan",
         "ssr_compile.cli.solve",
         "ssr_compile.cli.sim",
         "ssr_compile.cli.run",

@@ -11,7 +11,7 @@ from pathlib import Path
 from .. import limits
 from .. import syntax as S
 from ..errors import PlannerFailure, SSRError
-from ..files import write_files_atomically
+from ..files import check_output, write_files_atomically
 from ..inputs import load_inputs
 from ..json_output import document, dumps
 from . import options
@@ -125,7 +125,8 @@ def _configure_compile(p: argparse.ArgumentParser) -> None:
         "--output",
         required=True,
         metavar="DIR",
-        help="folder for domain.pddl, problem.pddl, objects.json",
+        help="folder for domain.pddl, problem.pddl, actions.json (the map back to your "
+        "actions: `ssr-compile map-plan`), objects.json",
     )
     p.add_argument(
         "--for",
@@ -134,6 +135,14 @@ def _configure_compile(p: argparse.ArgumentParser) -> None:
         help="lower to what this planner supports (e.g. fd, pyperplan, up:fast-downward); "
         "default: keep everything (axioms, quantifiers, costs), which Fast Downward reads; "
         "unified-planning's PDDL reader needs --for up:... (it has no derived predicates)",
+    )
+    p.add_argument(
+        "--task",
+        choices=("auto", "lifted", "ground"),
+        default="auto",
+        help="auto (the default): for a planner that takes a ground task in `plan` (--for up:*, "
+        "pyperplan), the lifted task where it reads it (no derived predicates, no "
+        "quantifiers, few groundings), else the ground task; lifted, ground: always that one",
     )
     p.add_argument(
         "--unit-cost", action="store_true", help="drop action costs (every action costs 1)"
@@ -150,14 +159,18 @@ def run_compile(args: argparse.Namespace) -> int:
 
 
 def _run_compile(args: argparse.Namespace) -> int:
+    from ..artifact import actions_document
     from ..compile.lower import lower
-    from ..compile.pipeline import compile_problem, declare_stream_predicates
+    from ..compile.pipeline import declare_stream_predicates
     from ..printer import to_text
 
     warnings: list[str] = []
+    out = Path(args.output)
+    names = ("domain.pddl", "problem.pddl", "objects.json") if args.problem else ("domain.pddl",)
+    for name in names:
+        check_output(out / name, "-o")  # before the work, not after it
     domain, streams, problem = load_inputs(args.domain, args.stream, args.problem, warnings)
     caps = _caps_for(args.backend)
-    out = Path(args.output)
     files: dict[str, str] = {}
     if problem is None:
         # Domain level: derived predicates and cost functions, no stream instances.
@@ -176,15 +189,7 @@ def _run_compile(args: argparse.Namespace) -> int:
     else:
         # Files for any planner: every optimistic object keeps its own name, so objects.json
         # maps each one in a plan back to its stream instance (no shared leaf objects).
-        compiled = compile_problem(
-            domain,
-            streams,
-            problem,
-            caps=caps,
-            level=args.level,
-            unit_cost=args.unit_cost,
-            leaves=False,
-        )
+        compiled, task = _compile_artifact(domain, streams, problem, caps, args)
         files["domain.pddl"] = to_text(compiled.domain, shorthand=args.shorthand)
         files["problem.pddl"] = to_text(compiled.problem, shorthand=args.shorthand)
         inst = compiled.instantiation
@@ -205,7 +210,13 @@ def _run_compile(args: argparse.Namespace) -> int:
             },
             indent=1,
         )
+        source = {k: str(Path(getattr(args, k)).resolve()) for k in ("domain", "stream", "problem")}
+        files["actions.json"] = actions_document(
+            compiled, task=task, level=args.level, source=source
+        )
         summary = {
+            "task": task,
+            "actions": len(compiled.domain.actions),
             "level": args.level,
             "scale": compiled.scale,
             "instances": len(inst.results),
@@ -218,6 +229,66 @@ def _run_compile(args: argparse.Namespace) -> int:
     print(f"wrote {', '.join(str(out / n) for n in files)}")
     print("; ".join(f"{k}: {v}" for k, v in summary.items() if v is not None))
     return 0
+
+
+#: ``--task auto`` writes the lifted task for a ground-task target when its predicates have at
+#: most this many groundings over the typed objects: unified-planning's PDDL writer (which its
+#: engines use to call their planners) lists every grounding of every predicate.
+LIFTED_GROUNDINGS = 200_000
+
+
+def _compile_artifact(domain, streams, problem, caps, args):
+    """Compile for ``compile``: ``(compiled, "lifted" | "ground")``.  Targets that take a
+    ground task in ``plan`` (``up:*``, ``pyperplan``) get the lifted task where it is typed,
+    quantifier-free and axiom-free and its groundings are few (``--task auto``): their readers
+    read it, and it is orders of magnitude smaller than the ground task."""
+    from dataclasses import replace
+
+    from ..compile.pipeline import compile_problem
+    from ..errors import UnsupportedError
+
+    def run(c):
+        # Every optimistic object keeps its own name, so objects.json maps each one in a plan
+        # back to its stream instance (no shared leaf objects).
+        return compile_problem(
+            domain, streams, problem, caps=c, level=args.level, unit_cost=args.unit_cost,
+            leaves=False,
+        )  # fmt: skip
+
+    ground = replace(caps, ground=True)
+    if args.task == "ground":
+        return run(ground), "ground"
+    if not caps.ground or args.task == "lifted":
+        return run(replace(caps, ground=False)), "lifted"
+    if not _liftable(domain, problem):
+        return run(ground), "ground"
+    try:
+        compiled = run(replace(caps, ground=False))
+    except UnsupportedError:
+        return run(ground), "ground"
+    if _groundings(compiled.domain, compiled.problem) > LIFTED_GROUNDINGS:
+        return run(ground), "ground"
+    return compiled, "lifted"
+
+
+def _liftable(domain: S.Domain, problem: S.Problem) -> bool:
+    """No derived predicates and no quantifiers: the lifted lowering adds none."""
+    from ..compile.formulas import has
+
+    if domain.axioms:
+        return False
+    formulas = [problem.goal] + [f for a in domain.actions for f in (a.precondition, a.effect)]
+    return not any(f is not None and has(f, S.Exists, S.Forall) for f in formulas)
+
+
+def _groundings(domain: S.Domain, problem: S.Problem) -> int:
+    """How many ground atoms the task's predicates have over its typed objects."""
+    from math import prod
+
+    from ..compile.quantifiers import objects_by_type
+
+    of = objects_by_type(domain, problem)
+    return sum(prod(len(of(p.type)) for p in d.params) for d in domain.predicates)
 
 
 # ---------------------------------------------------------------- plan

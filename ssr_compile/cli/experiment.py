@@ -8,6 +8,7 @@ import shlex
 import sys
 
 from ..errors import SSRError
+from . import options
 from .registry import register
 
 
@@ -138,8 +139,9 @@ def run_experiment(args: argparse.Namespace) -> int:
                 "--tasks progress,belief-detect"
             )
         args.tasks = ",".join(X.KITCHEN_TASKS)
+    X.check_report_outputs(args.output)  # the folder can be written, before any episode
     variants = X.parse_variants(args.variants)
-    seeds = X.parse_seeds(args.seeds)
+    seeds = options.seed_list(args.seeds)
     tasks = X.parse_tasks(args.tasks)
     get_planner(args.planner)  # bad input before anything runs
     executor_name = "ray" if args.ray_address else args.executor
@@ -227,6 +229,7 @@ def _configure_report(p: argparse.ArgumentParser) -> None:
 
 
 def run_report(args: argparse.Namespace) -> int:
+    from .. import experiment as X
     from ..experiment import write_report
 
     if len(args.dirs) > 1 and args.output is None:
@@ -241,6 +244,7 @@ def run_report(args: argparse.Namespace) -> int:
     alone = len(args.dirs) == 1 and (
         args.output is None or Path(args.output).resolve() == Path(args.dirs[0]).resolve()
     )
+    X.check_report_outputs(args.dirs[0] if alone else args.output, journal=not alone)
     if alone:
         table, plot, text = write_report(args.dirs[0])
     else:

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ..catalog import TASKS
 from ..errors import SSRError
-from ..files import write_atomically
+from ..files import check_output, write_atomically
+from . import options
 from .registry import register
 
 
@@ -16,7 +17,7 @@ def _task_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("task", metavar="TASK", choices=TASKS, help="one of: " + ", ".join(TASKS))
     p.add_argument(
         "--seed",
-        type=int,
+        type=options.seed,
         default=0,
         metavar="N",
         help="task seed (default 0): random poses within the supports",
@@ -24,11 +25,18 @@ def _task_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", required=True, metavar="PNG", help="the picture to write")
 
 
-def _write_png(output: str, draw) -> str:
-    """Draw into a temporary file beside OUTPUT, then move it in place (nothing half-written)."""
+def _check_png(output: str) -> Path:
+    """OUTPUT, checked before any work: a .png path that can be written."""
     out = Path(output)
     if out.suffix.lower() != ".png":
         raise SSRError(f"the output must be a .png file, got '{output}'")
+    check_output(out, "-o")
+    return out
+
+
+def _write_png(output: str, draw) -> str:
+    """Draw into a temporary file beside OUTPUT, then move it in place (nothing half-written)."""
+    out = _check_png(output)
     write_atomically(out, draw)
     return str(out)
 
@@ -98,6 +106,7 @@ def run_belief_plot(args: argparse.Namespace) -> int:
 
     if args.particles < 1:
         raise SSRError("--particles must be at least 1")
+    _check_png(args.output)  # before the task is built
     task = make_task(args.task, args.seed)
     try:
         rng = np.random.default_rng(args.seed)

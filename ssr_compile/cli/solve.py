@@ -13,7 +13,7 @@ from typing import Any
 
 from .. import limits
 from ..errors import SSRError, TimeLimitReached
-from ..examples import SETTINGS_FILE, ExampleSettings, read_settings, resolve_folder
+from ..examples import ExampleSettings, read_settings, resolve_folder
 from ..inputs import load_inputs
 from ..json_output import document, dumps, to_json
 from . import options
@@ -101,8 +101,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
         metavar="N",
         help="a generator whose draw was rejected by a test of the stream plan draws again at "
         "once, up to N times per other draw of the plan the test checks it against (a "
-        "placement among six others: 6N), and one whose draw failed once, before the planner "
-        "is called again (default 2; 0: off); or example.toml's",
+        "placement among six others: 6N; N more for each stream plan the tests rejected "
+        "before), and one whose draw failed once, before the planner is called again "
+        "(default 2; 0: off); or example.toml's",
     )
     p.add_argument(
         "--seed",
@@ -129,8 +130,9 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.epilog = _DEFAULTS_NOTE
 
 
-# The settings of a solve: default value, validation (of example.toml's text), and how a
-# value prints.  Every one of them can be given on the command line, example.toml, or neither.
+# The settings of a solve: default value and flag (example.toml's values are checked as it is
+# read: examples.check_table).  Every one of them can be given on the command line,
+# example.toml, or neither.
 DEFAULTS = {
     "planner": "fd",
     "time_limit": 60.0,
@@ -155,14 +157,6 @@ _FLAGS = {
 }
 
 
-def _check_bool(text: str) -> bool:
-    if text in ("True", "true"):
-        return True
-    if text in ("False", "false"):
-        return False
-    raise argparse.ArgumentTypeError(f"expected true or false, got '{text}'")
-
-
 def _check_algorithm(text: str) -> str:
     from ..solver import ALGORITHMS
 
@@ -175,62 +169,18 @@ def _check_resample(text: str) -> int:
     return options.count(text, 0, what="a number of draws")
 
 
-def _check_name(text: str) -> str:
-    if not text:
-        raise argparse.ArgumentTypeError("expected a planner name")
-    return text
-
-
-_CHECKS = {
-    "planner": _check_name,
-    "time_limit": options.seconds,
-    "level": options.level,
-    "max_level": options.level,
-    "max_cost": options.cost_bound,
-    "defer": _check_bool,
-    "algorithm": _check_algorithm,
-    "resample": _check_resample,
-    "seed": options.seed,
-}
-
-
 def resolve_settings(
     args: argparse.Namespace, example: ExampleSettings | Mapping[str, Any]
 ) -> dict[str, tuple[Any, str]]:
-    """{name: (value, source)}: each setting from its flag, else example.toml, else the default.
+    """{name: (value, source)}: each setting from its flag, else example.toml, else the default
+    (:meth:`ExampleSettings.resolve`, the resolution ``run`` shares).
 
-    ``example``: the example's settings (a table as example.toml holds it is read as one).
-    A flag always wins: a level from example.toml above a --max-level given on the command line
-    is lowered to it (and a --level above example.toml's max_level raises that)."""
+    ``example``: the example's settings (a table as example.toml holds it is read, and
+    checked, as one)."""
     if not isinstance(example, ExampleSettings):
         example = ExampleSettings.from_table(example)
-    config_file = str(example.file) if example.file else SETTINGS_FILE
-    out: dict[str, tuple] = {}
-    for name, default in DEFAULTS.items():
-        value = getattr(args, name, None)
-        if value is not None:
-            out[name] = (value, "flag " + _FLAGS[name])
-        elif name in example.solver:
-            written = example.solver[name]
-            try:  # example.toml's values pass the same validation as the options
-                out[name] = (_CHECKS[name](str(written)), example.source(name))
-            except argparse.ArgumentTypeError as e:
-                raise SSRError(f"{name} = {written!r}: {e}", file=config_file) from None
-        else:
-            out[name] = (default, "default")
-    (level, lsrc), (top, tsrc) = out["level"], out["max_level"]
-    if level > top:
-        if tsrc.startswith("flag") and not lsrc.startswith("flag"):
-            out["level"] = (top, f"{lsrc}, lowered to --max-level")
-        elif lsrc.startswith("flag") and not tsrc.startswith("flag"):
-            out["max_level"] = (level, f"{tsrc}, raised to --level")
-        else:
-            where = SETTINGS_FILE if lsrc == tsrc == SETTINGS_FILE else None
-            raise SSRError(
-                f"the first level ({level}, {lsrc}) is above the last ({top}, {tsrc})",
-                file=where and config_file,
-            )
-    return out
+    flags = {name: getattr(args, name, None) for name in DEFAULTS}
+    return example.resolve(flags, DEFAULTS, _FLAGS)
 
 
 def _format_setting(name: str, value) -> str:
@@ -291,13 +241,11 @@ def jobs_from_args(args) -> tuple[list[tuple[Path, Path, Path]], ExampleSettings
 
 def run(args: argparse.Namespace) -> int:
     from ..solver import SolveOptions, print_solution, solve
-    from ..stream import module_for_problem
 
     if args.full and not args.json:
         raise SSRError("--full goes with --json (it prints every value in full)")
     jobs, example = jobs_from_args(args)
-    module_spec = args.streams or example.streams
-    if not module_spec:
+    if not (args.streams or example.streams):
         raise SSRError('example.toml does not name a streams module (streams = "...")')
     settings = resolve_settings(args, example)
     if args.verbose:
@@ -330,7 +278,7 @@ def run(args: argparse.Namespace) -> int:
                 domain, streams, problem = load_inputs(
                     str(domain_path), str(stream_path), str(problem_path), warnings
                 )
-                module = module_for_problem(module_spec, problem_path, seed)
+                module = example.streams_module(problem_path, seed, args.streams)
                 module.check_against(streams, str(stream_path))
                 progress = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
                 for w in warnings if args.verbose else ():

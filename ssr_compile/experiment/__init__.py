@@ -9,7 +9,7 @@ same sweep run again resumes (episodes already on file are not re-run).  ``DIR/t
 
 The modules, in the order they build on each other:
 
-* :mod:`.spec` -- tasks, variants and seeds from the command line; the sweep's
+* :mod:`.spec` -- tasks and variants from the command line (seeds: ``cli/options.py``); the sweep's
   :class:`Settings` (a :class:`~ssr_compile.policy.PolicySettings` and the process limits);
   the episodes;
 * :mod:`.revision` -- the toolkit's version and git commit each record names;
@@ -28,7 +28,15 @@ from ..catalog import VARIANTS
 from .executors import ProcessExecutor, RayExecutor
 from .isolation import run_isolated
 from .paper import PAPER_TABLE1
-from .report import fmt_time, median, render_plot, render_table, seed_list, write_report
+from .report import (
+    check_report_outputs,
+    fmt_time,
+    median,
+    render_plot,
+    render_table,
+    seed_list,
+    write_report,
+)
 from .revision import provenance
 from .spec import (
     EpisodeSpec,
@@ -36,7 +44,6 @@ from .spec import (
     Task,
     episode_specs,
     kitchen_has_environment,
-    parse_seeds,
     parse_tasks,
     parse_variants,
 )
@@ -50,7 +57,6 @@ __all__ = [
     "Task",
     "Settings",
     "EpisodeSpec",
-    "parse_seeds",
     "parse_tasks",
     "parse_variants",
     "kitchen_has_environment",
@@ -70,4 +76,5 @@ __all__ = [
     "render_table",
     "render_plot",
     "write_report",
+    "check_report_outputs",
 ]

@@ -4,8 +4,10 @@ episode in a process of its own in the same way, so failures are recorded alike)
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -22,8 +24,14 @@ class ProcessExecutor:
         self.workers = workers
 
     def run(
-        self, specs: list[EpisodeSpec], log_dir: str | None, on_result: Callable[[dict], None]
+        self,
+        specs: list[EpisodeSpec],
+        log_dir: str | None,
+        on_result: Callable[[dict], None],
+        tmp_root: str | None = None,
     ) -> None:
+        """Run ``specs``, calling ``on_result`` with each record as it comes; the episodes'
+        temporary folders go into ``tmp_root`` (default: the temporary directory)."""
         from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
         stop = threading.Event()
@@ -31,12 +39,22 @@ class ProcessExecutor:
         def one(spec: EpisodeSpec) -> dict | None:
             if stop.is_set():
                 return None
-            return run_isolated(spec, log_dir)
+            return run_isolated(spec, log_dir, tmp_root)
 
         ACTIVE.open()
         pool = ThreadPoolExecutor(max_workers=self.workers, thread_name_prefix="episode")
+        todo = iter(specs)
+        pending: dict = {}
+
+        def fill() -> None:  # at most `workers` submitted at a time: no future per episode
+            while len(pending) < self.workers:
+                spec = next(todo, None)
+                if spec is None:
+                    return
+                pending[pool.submit(one, spec)] = spec
+
         try:
-            pending = {pool.submit(one, s): s for s in specs}
+            fill()
             while pending:
                 done, _ = wait(list(pending), timeout=0.5, return_when=FIRST_COMPLETED)
                 for fut in done:
@@ -47,6 +65,7 @@ class ProcessExecutor:
                         rec = make_record(spec, HARNESS, f"{type(e).__name__}: {e}", 0.0)
                     if rec is not None:
                         on_result(rec)
+                fill()
         except BaseException:
             stop.set()
             pool.shutdown(wait=False, cancel_futures=True)
@@ -66,8 +85,14 @@ class RayExecutor:
         self.address = address
 
     def run(
-        self, specs: list[EpisodeSpec], log_dir: str | None, on_result: Callable[[dict], None]
+        self,
+        specs: list[EpisodeSpec],
+        log_dir: str | None,
+        on_result: Callable[[dict], None],
+        tmp_root: str | None = None,
     ) -> None:
+        """As :meth:`ProcessExecutor.run`.  A Ray instance started here keeps its files (its
+        session folder, its workers' temporary files) in ``tmp_root`` too."""
         try:
             import ray
         except ImportError:
@@ -87,7 +112,8 @@ class RayExecutor:
             else:
                 kwargs["num_cpus"] = self.workers or os.cpu_count() or 1
             try:
-                ray.init(**kwargs)
+                with _temporary_directory(None if self.address else tmp_root):
+                    ray.init(**kwargs)
             except Exception as e:  # noqa: BLE001 - a cluster that cannot be reached: bad input
                 raise SSRError(
                     f"cannot start or reach Ray{' at ' + self.address if self.address else ''}: {e}"
@@ -95,13 +121,16 @@ class RayExecutor:
         try:
             limit = self.workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
             remote = ray.remote(num_cpus=1, max_retries=0)(run_isolated)
-            todo = list(specs)
+            todo = deque(specs)
             flight: dict[Any, EpisodeSpec] = {}
             while todo or flight:
                 while todo and len(flight) < limit:
-                    spec = todo.pop(0)
+                    spec = todo.popleft()
                     # logs stay on the node that ran the episode only when it is this one
-                    flight[remote.remote(spec, log_dir if not self.address else None)] = spec
+                    if self.address:  # another machine's folders are not ours to name
+                        flight[remote.remote(spec, None)] = spec
+                    else:
+                        flight[remote.remote(spec, log_dir, tmp_root)] = spec
                 ready, _ = ray.wait(list(flight), num_returns=1, timeout=0.5)
                 for ref in ready:
                     spec = flight.pop(ref)
@@ -126,3 +155,21 @@ class RayExecutor:
         finally:
             if started_here:
                 ray.shutdown()
+
+
+@contextlib.contextmanager
+def _temporary_directory(folder: str | None):
+    """``TMPDIR`` is ``folder`` inside the block (for the processes started in it, which keep
+    it: Ray's, on Linux, put their session folder and temporary files there)."""
+    if folder is None:
+        yield
+        return
+    old = os.environ.get("TMPDIR")
+    os.environ["TMPDIR"] = folder
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("TMPDIR", None)
+        else:
+            os.environ["TMPDIR"] = old

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import sys
+import tempfile
 import threading
 import time
 import traceback
@@ -21,6 +23,8 @@ from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 
+from .. import quiet_pybullet
+from ..files import current_umask
 from ..planners.proc import _descendants
 from ..policy import run_policy
 from .journal import CRASHED, FINISHED, OOM, TIMEOUT, make_record
@@ -46,9 +50,12 @@ def run_episode_here(spec: EpisodeSpec) -> dict:
     return out
 
 
-def _child(spec: EpisodeSpec, conn, log_path: str | None, started: float) -> None:
+def _child(
+    spec: EpisodeSpec, conn, log_path: str | None, started: float, tmpdir: str, umask: int
+) -> None:
     """The episode's process: its own session (so the whole tree can be killed), output to
-    its log, an address-space limit; sends ``(status, payload)`` back."""
+    its log, its temporary files in ``tmpdir`` (which the harness removes, however the
+    episode ends), an address-space limit; sends ``(status, payload)`` back."""
     entered = time.time()
     try:
         os.setsid()
@@ -57,8 +64,11 @@ def _child(spec: EpisodeSpec, conn, log_path: str | None, started: float) -> Non
     _die_with_parent()
     for name in ("SIGTERM", "SIGHUP", "SIGINT"):
         signal.signal(getattr(signal, name), signal.SIG_DFL)
+    os.umask(umask)  # the sweep's now, not the fork server's when it started
+    _use_tmpdir(tmpdir)
+    quiet_pybullet.install()  # a fork server started elsewhere may not have it
     if log_path:
-        fd = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+        fd = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o666)  # the umask's
         os.dup2(fd, 1)
         os.dup2(fd, 2)
         os.close(fd)
@@ -90,6 +100,13 @@ def _child(spec: EpisodeSpec, conn, log_path: str | None, started: float) -> Non
     except Exception:  # noqa: BLE001 - the parent is gone or the result does not pickle
         pass
     conn.close()
+
+
+def _use_tmpdir(tmpdir: str) -> None:
+    """Temporary files of this process (``tempfile``) and of the programs it starts
+    (``TMPDIR``) go to ``tmpdir``."""
+    os.environ["TMPDIR"] = tmpdir
+    tempfile.tempdir = tmpdir
 
 
 def _die_with_parent() -> None:
@@ -185,6 +202,7 @@ def _warm_from_environment() -> None:
     names = os.environ.get(_WARM)
     if not names or "multiprocessing.forkserver" not in sys.modules:
         return
+    quiet_pybullet.install()  # PyBullet's banner, printed here, landed in the progress bar
     try:
         for folder in json.loads(names):
             try:
@@ -254,9 +272,16 @@ def _exit_reason(exitcode: int | None) -> tuple[str, str]:
     return CRASHED, f"the episode's process exited with code {exitcode} without a result"
 
 
-def run_isolated(spec: EpisodeSpec, log_dir: str | None = None) -> dict:
+def run_isolated(
+    spec: EpisodeSpec, log_dir: str | None = None, tmp_root: str | None = None
+) -> dict:
     """Run one episode in a process of its own and return its JSON record (never raises for
-    the episode's failures: they are the record's ``status`` and ``failure``)."""
+    the episode's failures: they are the record's ``status`` and ``failure``).
+
+    The episode's temporary files (its planners' folders, the kitchen's robot files, those of
+    the programs it starts) go to a folder of its own in ``tmp_root`` (default: the temporary
+    directory), removed when the episode ends -- finished, crashed, killed at its limit or
+    by an interrupted sweep."""
     ctx = _context()
     log_path = None
     if log_dir:
@@ -264,10 +289,19 @@ def run_isolated(spec: EpisodeSpec, log_dir: str | None = None) -> dict:
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in spec.task.label)
         log_path = str(Path(log_dir) / f"{safe}-{spec.variant}-{spec.seed}.log")
         Path(log_path).unlink(missing_ok=True)
+    tmpdir = tempfile.mkdtemp(prefix="ssr-episode-", dir=tmp_root)
+    try:
+        return _run_in_child(ctx, spec, log_path, tmpdir)
+    finally:
+        shutil.rmtree(tmpdir, ignore_errors=True)
+
+
+def _run_in_child(ctx, spec: EpisodeSpec, log_path: str | None, tmpdir: str) -> dict:
     reader, writer = ctx.Pipe(duplex=False)
     t0 = time.monotonic()
     started = time.time()
-    proc = ctx.Process(target=_child, args=(spec, writer, log_path, started), daemon=False)
+    args = (spec, writer, log_path, started, tmpdir, current_umask())
+    proc = ctx.Process(target=_child, args=args, daemon=False)
     proc.start()
     writer.close()
     ACTIVE.add(proc.pid)

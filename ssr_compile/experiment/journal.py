@@ -4,10 +4,12 @@ and flushed as it finishes (:class:`Journal`), read back for resuming and for th
 from __future__ import annotations
 
 import json
+import math
 import os
 import socket
 import time
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -68,27 +70,108 @@ def make_record(
     return rec
 
 
-def read_records(path: Path) -> tuple[list[dict], int]:
-    """The JSON lines of ``path`` (a missing file: none) and how many lines were unreadable
-    (a line cut short by a killed sweep)."""
-    records, bad = [], 0
+@dataclass(frozen=True)
+class SkippedLine:
+    """A line of ``episodes.jsonl`` that is not an episode's record, and why."""
+
+    line: int  # 1-based
+    reason: str
+
+
+def _number(value, whole: bool) -> bool:
+    if isinstance(value, bool):
+        return False
+    if whole:
+        return isinstance(value, int) and value >= 0
+    return isinstance(value, (int, float)) and math.isfinite(value) and value >= 0
+
+
+# What the report and a resumed sweep read of a record: field -> (check, what is expected).
+# A field absent or null is allowed, but for the three that name the episode.
+_FIELDS = {
+    "task": (lambda v: isinstance(v, str) and v != "", "a task name (text)"),
+    "variant": (lambda v: isinstance(v, str) and v != "", "a variant name (text)"),
+    "seed": (lambda v: _number(v, True), "a whole number >= 0"),
+    "status": (lambda v: isinstance(v, str), "text"),
+    "success": (lambda v: isinstance(v, bool), "true or false"),
+    "failure": (lambda v: isinstance(v, str), "text"),
+    "planning_time": (lambda v: _number(v, False), "a number of seconds >= 0"),
+    "wall_time": (lambda v: _number(v, False), "a number of seconds >= 0"),
+    "cycles": (lambda v: _number(v, True), "a whole number >= 0"),
+    "constrained_held": (lambda v: _number(v, True), "a whole number >= 0"),
+    "fallbacks": (lambda v: _number(v, True), "a whole number >= 0"),
+    "commit": (lambda v: isinstance(v, str), "text"),
+    "settings": (
+        lambda v: _settings_ok(v),
+        "an object with budget, max_cycles, constrained_time, unconstrained_time, planner",
+    ),
+}
+_IDENTITY = ("task", "variant", "seed")
+_SETTINGS = {
+    "budget": False,
+    "max_cycles": True,
+    "constrained_time": False,
+    "unconstrained_time": False,
+}
+
+
+def _settings_ok(value) -> bool:
+    if not isinstance(value, dict) or not isinstance(value.get("planner"), str):
+        return False
+    return all(_number(value.get(k), whole) for k, whole in _SETTINGS.items())
+
+
+def record_problem(rec) -> str | None:
+    """Why a parsed JSON line is not an episode's record (None: it is one)."""
+    if not isinstance(rec, dict):
+        return f"not a JSON object but {type(rec).__name__}"
+    for name, (check, expected) in _FIELDS.items():
+        value = rec.get(name)
+        if value is None:
+            if name in _IDENTITY:
+                return f"no '{name}' (expected {expected})"
+            continue
+        if not check(value):
+            shown = json.dumps(value)
+            shown = shown if len(shown) <= 40 else shown[:37] + "..."
+            return f"'{name}' is {shown} (expected {expected})"
+    return None
+
+
+def read_records(path: Path) -> tuple[list[dict], list[SkippedLine]]:
+    """The records of ``path`` (a missing file: none) and the lines skipped: cut short by a
+    killed sweep (not JSON), or JSON that is not a record the report can read (a field of the
+    wrong type, e.g. ``"seed": "x"``; see :func:`record_problem`)."""
+    records: list[dict] = []
+    skipped: list[SkippedLine] = []
     if not path.exists():
-        return records, bad
-    with open(path, encoding="utf-8") as f:
-        for line in f:
+        return records, skipped
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for number, line in enumerate(f, 1):
             line = line.strip()
             if not line:
                 continue
             try:
                 rec = json.loads(line)
-            except json.JSONDecodeError:
-                bad += 1
+            except (json.JSONDecodeError, RecursionError):
+                skipped.append(SkippedLine(number, "not a complete JSON line"))
                 continue
-            if isinstance(rec, dict) and {"task", "variant", "seed"} <= rec.keys():
+            problem = record_problem(rec)
+            if problem is None:
                 records.append(rec)
             else:
-                bad += 1
-    return records, bad
+                skipped.append(SkippedLine(number, problem))
+    return records, skipped
+
+
+def describe_skipped(path: Path, skipped: list[SkippedLine], what: str, most: int = 10) -> str:
+    """``PATH: 2 line(s) skipped (WHAT):`` and a ``PATH:LINE: why`` line for each (at most
+    ``most``, then how many more)."""
+    lines = [f"{path}: {len(skipped)} unreadable line(s) skipped ({what}):"]
+    lines += [f"{path}:{s.line}: {s.reason}" for s in skipped[:most]]
+    if len(skipped) > most:
+        lines.append(f"{path}: and {len(skipped) - most} more")
+    return "\n".join(lines)
 
 
 def latest(records: Iterable[dict]) -> dict[tuple[str, str, int], dict]:
@@ -120,7 +203,12 @@ class Journal:
             ) from None
         except OSError as e:
             raise SSRError(f"cannot create the folder: {e.strerror}", file=str(self.dir)) from None
-        self._lock_file = open(self.dir / ".lock", "w")  # noqa: SIM115
+        try:
+            self._lock_file = open(self.dir / ".lock", "w")  # noqa: SIM115
+        except OSError as e:
+            raise SSRError(
+                f"cannot write into the folder: {e.strerror}", file=str(self.dir)
+            ) from None
         try:
             fcntl.flock(self._lock_file, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:

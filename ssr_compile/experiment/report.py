@@ -4,11 +4,12 @@ layout, ours next to the paper's, and per-cell details) and ``DIR/table1.png``."
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable
+import sys
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from ..errors import SSRError
-from .journal import EPISODES_FILE, FINISHED, latest, read_records
+from .journal import EPISODES_FILE, FINISHED, SkippedLine, describe_skipped, latest, read_records
 from .paper import PAPER_EPISODES, PAPER_TABLE1
 from .spec import task_title
 from .statistics import cells, groups
@@ -21,7 +22,9 @@ def fmt_time(t: float) -> str:
     return f"{t:.0f}" if t >= 100 else f"{t:.1f}" if t >= 1 else f"{t:.2f}"
 
 
-def render_table(records: Iterable[dict], command: str | None = None) -> str:
+def render_table(
+    records: Iterable[dict], command: str | None = None, notes: Iterable[str] = ()
+) -> str:
     """Markdown in Table I's layout: a row per task (ours, then the paper's), per variant the
     success % [95% Wilson interval] and the mean planning time of the successful trials
     [95% bootstrap interval]."""
@@ -91,6 +94,7 @@ def render_table(records: Iterable[dict], command: str | None = None) -> str:
     )
     versions = sorted({str(r.get("version")) for r in recs})
     lines.append(f"Toolkit {', '.join(versions)}, commit {', '.join(commits)}.")
+    lines += list(notes)
     if command:
         lines += ["", "Command:", "", "```bash", command, "```"]
     return "\n".join(lines) + "\n"
@@ -233,16 +237,23 @@ def render_plot(records: Iterable[dict], path: str | Path) -> None:
 
 
 def write_report(
-    out_dir: str | Path, command: str | None = None, sources: list[str | Path] | None = None
+    out_dir: str | Path,
+    command: str | None = None,
+    sources: list[str | Path] | None = None,
+    say: Callable[[str], None] | None = None,
 ) -> tuple[Path, Path, str]:
     """Rebuild ``table.md`` and ``table1.png`` from ``episodes.jsonl`` alone.  With
     ``sources`` (sweep folders), their episodes merged -- the last folder's record of a task,
     variant and seed wins -- are written to ``out_dir/episodes.jsonl`` first, so that the
     merged folder is a report of its own; the commands recorded in the sources' tables are
-    kept in the new one."""
-    from ..files import write_atomically
+    kept in the new one.  Lines of an episodes.jsonl that are not records are skipped, said
+    (``say``, default: standard error) and noted in the table."""
+    from ..files import Content, write_files_atomically
 
     out = Path(out_dir)
+    say = say or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    skipped: list[tuple[Path, list[SkippedLine]]] = []
+    files: dict[Path, Content] = {}
     if sources:
         records, commands = [], []
         for src in map(Path, sources):
@@ -252,7 +263,7 @@ def write_report(
                     "(its episodes.jsonl would be overwritten)",
                     file=str(out),
                 )
-            records += _records_of(src)
+            records += _records_of(src, skipped)
             old = src / TABLE_FILE
             found = _command_of(old.read_text(encoding="utf-8")) if old.is_file() else None
             if found and found not in commands:
@@ -261,32 +272,56 @@ def write_report(
         if command is not None:
             commands.append(command)
         command = "\n".join(commands) or None
-        out.mkdir(parents=True, exist_ok=True)
-        write_atomically(
-            out / EPISODES_FILE, "".join(json.dumps(r, sort_keys=True) + "\n" for r in merged)
-        )
+        files[out / EPISODES_FILE] = "".join(json.dumps(r, sort_keys=True) + "\n" for r in merged)
         records = merged
     else:
-        records = _records_of(out)
+        records = _records_of(out, skipped)
+    for path, lines in skipped:
+        say(describe_skipped(path, lines, "not in the table"))
     if command is None:
         old = out / TABLE_FILE
         command = _command_of(old.read_text(encoding="utf-8")) if old.is_file() else None
-    text = render_table(records, command)
-    write_atomically(out / TABLE_FILE, text)
-    render_plot(records, out / PLOT_FILE)
+    notes = [
+        f"Not in the table: {len(lines)} unreadable line(s) of {path} (lines "
+        + ", ".join(str(x.line) for x in lines)
+        + "; `ssr-compile report` says why)."
+        for path, lines in skipped
+    ]
+    text = render_table(records, command, notes)
+    files[out / TABLE_FILE] = text
+    files[out / PLOT_FILE] = lambda tmp: render_plot(records, tmp)
+    write_files_atomically(files)  # the merged episodes, the table and its plot: as a unit
     return out / TABLE_FILE, out / PLOT_FILE, text
 
 
-def _records_of(folder: Path) -> list[dict]:
+def check_report_outputs(out_dir: str | Path, option: str = "-o", journal: bool = False) -> None:
+    """Before the work: the report's files (and, with ``journal``, a merge's episodes.jsonl)
+    can be written into ``out_dir``."""
+    from ..files import check_output
+
+    names = ([EPISODES_FILE] if journal else []) + [TABLE_FILE, PLOT_FILE]
+    for name in names:
+        check_output(Path(out_dir) / name, option)
+
+
+def _records_of(folder: Path, skipped: list[tuple[Path, list[SkippedLine]]]) -> list[dict]:
+    """The records of ``folder``'s episodes.jsonl; the lines skipped are added to ``skipped``."""
     path = folder / EPISODES_FILE
     if not path.is_file():
         raise SSRError(
             f"no {EPISODES_FILE} in this folder (run `ssr-compile experiment -o {folder}` first)",
             file=str(folder),
         )
-    records, _bad = read_records(path)
+    records, bad = read_records(path)
     if not records:
+        if bad:
+            raise SSRError(
+                "holds no episode records:\n" + describe_skipped(path, bad, "all of them"),
+                file=str(path),
+            )
         raise SSRError("holds no episode records", file=str(path))
+    if bad:
+        skipped.append((path, bad))
     return records
 
 

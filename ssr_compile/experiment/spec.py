@@ -3,7 +3,6 @@ from the command line, and the episodes they make."""
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,34 +27,6 @@ class Task:
     @property
     def title(self) -> str:
         return task_title(self.label)
-
-
-def parse_seeds(text: str) -> list[int]:
-    """``0-24``, ``0,3,5``, ``0-4,10-12`` -> the seeds in order, without repeats."""
-    seeds: list[int] = []
-    if not text.strip():
-        raise SSRError("--seeds: empty; expected a range such as 0-24 or a list such as 0,3,5")
-    for part in text.split(","):
-        part = part.strip()
-        lo, dash, hi = part.partition("-")
-        try:
-            if dash:
-                a, b = int(lo), int(hi)
-            else:
-                a = b = int(part)
-        except ValueError:
-            raise SSRError(
-                f"--seeds: '{part}' is not a seed or a range of seeds "
-                "(expected e.g. 0-24 or 0,3,5; seeds are whole numbers >= 0)"
-            ) from None
-        if a < 0 or b < 0:
-            raise SSRError(f"--seeds: '{part}': seeds are whole numbers >= 0")
-        if b < a:
-            raise SSRError(f"--seeds: '{part}' is an empty range (its end is below its start)")
-        if b >= 2**32:
-            raise SSRError(f"--seeds: '{part}': seeds are below 2**32")
-        seeds.extend(s for s in range(a, b + 1) if s not in seeds)
-    return seeds
 
 
 def parse_variants(text: str) -> list[str]:
@@ -127,15 +98,11 @@ def resolve_task(name: str) -> Task:
 
 
 def load_task(task: Task):
-    """(example, environment factory) of a task; an example folder that is not shipped is put
-    on ``sys.path`` first, so that its environment module may sit beside its files."""
+    """(example, environment factory) of a task (its environment module may sit beside the
+    folder's files: :meth:`~ssr_compile.examples.Example.environment_factory`)."""
     from ..examples import load_example
-    from ..resources import domains_dir
 
-    folder = Path(task.folder)
-    if folder.parent.resolve() != domains_dir().resolve() and str(folder) not in sys.path:
-        sys.path.insert(0, str(folder))
-    example = load_example(folder)
+    example = load_example(Path(task.folder))
     return example, example.environment_factory()
 
 

@@ -3,7 +3,12 @@ it finishes, with a progress bar; the same sweep run again resumes."""
 
 from __future__ import annotations
 
+import fcntl
+import os
+import shutil
 import sys
+import tempfile
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,7 +16,7 @@ from pathlib import Path
 from ..errors import SSRError
 from .executors import ProcessExecutor, RayExecutor
 from .isolation import warm_fork_server
-from .journal import FINISHED, Journal, latest, read_records
+from .journal import FINISHED, Journal, describe_skipped, latest, read_records
 from .revision import provenance
 from .spec import EpisodeSpec
 
@@ -58,9 +63,9 @@ def run_sweep(
     out = Path(out_dir)
     say = say or (lambda msg: print(msg, file=sys.stderr, flush=True))
     with Journal(out) as journal:
-        records, bad = read_records(journal.path)
-        if bad:
-            say(f"{journal.path}: {bad} unreadable line(s) ignored (their episodes run again)")
+        records, skipped = read_records(journal.path)
+        if skipped:
+            say(describe_skipped(journal.path, skipped, "their episodes run again"))
         existing = latest(records)
         check_resumable(existing, specs)
         todo = [s for s in specs if s.key not in existing]
@@ -98,14 +103,64 @@ def run_sweep(
                 bar.set_postfix_str(f"success {ok}/{ran}", refresh=False)
                 bar.update(1)
 
+        # The episodes' temporary folders (their planners', the robot's files), and a local
+        # Ray's, go into one folder of the sweep's, removed however the sweep ends (an
+        # interrupted sweep kills its episodes before they could remove their own).
+        tmp_root, tmp_lock = _make_tmp_root() if todo else (None, None)
         try:
             if todo:
                 # The commit of the code the episodes run: read now, as the fork server loads
                 # it (read at the first record, it named a commit made while the sweep ran).
                 provenance()
                 warm_fork_server(s.task for s in todo)
-                executor.run(todo, str(out / "logs") if keep_logs else None, on_result)
+                executor.run(todo, str(out / "logs") if keep_logs else None, on_result, tmp_root)
         finally:
             if bar:
                 bar.close()
+            if tmp_root:
+                _remove_folder(tmp_root)
+                os.close(tmp_lock)
     return SweepOutcome(ran, skipped, ok, records)
+
+
+_TMP_PREFIX = "ssr-sweep-"
+_TMP_LOCK = ".sweep.lock"
+
+
+def _make_tmp_root() -> tuple[str, int]:
+    """A temporary folder for the sweep, locked while the sweep runs; first, the folders of
+    sweeps that were killed (SIGKILL, the kernel's out-of-memory killer) are removed: their
+    locks are free."""
+    _remove_stale_tmp_roots()
+    root = tempfile.mkdtemp(prefix=_TMP_PREFIX)
+    fd = os.open(os.path.join(root, _TMP_LOCK), os.O_WRONLY | os.O_CREAT, 0o600)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    return root, fd
+
+
+def _remove_stale_tmp_roots(min_age: float = 60.0) -> None:
+    for folder in Path(tempfile.gettempdir()).glob(_TMP_PREFIX + "*"):
+        try:
+            if time.time() - folder.stat().st_mtime < min_age:
+                continue  # perhaps a sweep that is just starting
+            fd = os.open(folder / _TMP_LOCK, os.O_WRONLY)
+        except OSError:
+            continue  # not a sweep's folder, or not ours to open
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            continue  # a sweep that runs
+        else:
+            shutil.rmtree(folder, ignore_errors=True)
+        finally:
+            os.close(fd)
+
+
+def _remove_folder(folder: str) -> None:
+    """Remove ``folder`` and what is in it (again for a moment, if processes that are being
+    stopped still write into it)."""
+    for _ in range(20):
+        shutil.rmtree(folder, ignore_errors=True)
+        if not os.path.lexists(folder):
+            return
+        time.sleep(0.1)

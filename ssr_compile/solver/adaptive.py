@@ -45,7 +45,6 @@ from typing import Any
 from ..compile.instantiate import Instance, Result
 from ..errors import InstanceCapReached, PlannerFailure, SSRError
 from ..planners.costs import plan_cost
-from .deferral import order_stream_plan, reschedule_stream_plan, stream_producers
 from .evaluation import bound_result, real_problem
 from .loop import SolverLoop
 from .preimage import PlanInvalid, plan_preimage
@@ -281,13 +280,10 @@ class AdaptiveLoop(SolverLoop):
             return self.finish_incumbent()
         if not needed:
             return self.better_of(SOLVED, plan_steps(plan, self.values, set()), cost, certificate)
-        deferrable = lambda s: self.module.info_for(s).deferrable  # noqa: E731
-        now, later = reschedule_stream_plan(needed, pre, plan, inst, deferrable, self.defer)
-        if not now:
-            deferred = {o for r in later for o in r.outputs}
-            steps = plan_steps(plan, self.values, deferred)
-            return self.finish(SOLVED, steps, cost, certificate, deferred=later)
-        ordered = order_stream_plan(now, self.module.info_for, stream_producers(now, inst))
+        scheduled = self.schedule(plan, pre, inst, needed, cost, certificate)
+        if isinstance(scheduled, Solution):
+            return scheduled
+        ordered, later = scheduled
         sk = _Skeleton(len(self.skeletons), list(plan), ordered, later, cost, compiled)
         self.skeletons.append(sk)
         self.say(f"  new {sk.describe()}: " + ", ".join(str(r.instance) for r in ordered))

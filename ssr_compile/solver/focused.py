@@ -26,7 +26,6 @@ from ..compile.instantiate import Result
 from ..errors import InstanceCapReached, PlannerFailure, SSRError
 from ..planners.base import UNSOLVABLE
 from ..planners.costs import plan_cost
-from .deferral import order_stream_plan, reschedule_stream_plan, stream_producers
 from .evaluation import bound_result, real_problem
 from .loop import SolverLoop
 from .plan_evaluation import DrawMemory, StreamPlanEvaluation
@@ -243,13 +242,10 @@ class FocusedLoop(SolverLoop):
         certificate = sorted(pre.static_facts, key=str)
         if not needed:
             return self.finish(SOLVED, plan_steps(plan, self.values, set()), cost, certificate)
-        deferrable = lambda s: self.module.info_for(s).deferrable  # noqa: E731
-        now, later = reschedule_stream_plan(needed, pre, plan, inst, deferrable, self.defer)
-        if not now:
-            deferred_objs = {o for r in later for o in r.outputs}
-            steps = plan_steps(plan, self.values, deferred_objs)
-            return self.finish(SOLVED, steps, cost, certificate, deferred=later)
-        ordered = order_stream_plan(now, self.module.info_for, stream_producers(now, inst))
+        scheduled = self.schedule(plan, pre, inst, needed, cost, certificate)
+        if isinstance(scheduled, Solution):
+            return scheduled
+        ordered, later = scheduled
         self.say("  stream plan: " + ", ".join(str(r.instance) for r in ordered))
         evaluation = StreamPlanEvaluation(
             ordered, inst, self.ev, self.module, self.problem, self.draws, self.stats,

@@ -13,10 +13,11 @@ from ..errors import InstanceCapReached
 from ..planners import fd as _default_backend  # noqa: F401 - the default, loaded with the solver
 from ..planners import get_planner
 from ..stream import StreamsModule, ValueTable
+from .deferral import order_stream_plan, reschedule_stream_plan, stream_producers
 from .evaluation import Evaluation, evaluate_eagerly
 from .options import ReplanState, SolveOptions
 from .preimage import Preimage, plan_preimage, stream_plan
-from .results import Solution, Statistics
+from .results import SOLVED, Solution, Statistics, plan_steps
 
 
 class SolverLoop:
@@ -203,6 +204,27 @@ class SolverLoop:
         inst = compiled.instantiation
         needed = stream_plan(inst, pre, plan) if inst else []
         return plan, pre, inst, needed
+
+    def schedule(
+        self,
+        plan,
+        pre: Preimage,
+        inst: Instantiation,
+        needed: list[Result],
+        cost: float,
+        certificate: list,
+    ) -> tuple[list[Result], list[Result]] | Solution:
+        """The stream plan rescheduled for the first action (§VII,
+        :func:`~ssr_compile.solver.deferral.reschedule_stream_plan`): the results to evaluate
+        now, in order, and those deferred -- or the solution itself when nothing is left to
+        evaluate now."""
+        deferrable = lambda s: self.module.info_for(s).deferrable  # noqa: E731
+        now, later = reschedule_stream_plan(needed, pre, plan, inst, deferrable, self.defer)
+        if not now:
+            deferred = {o for r in later for o in r.outputs}
+            steps = plan_steps(plan, self.values, deferred)
+            return self.finish(SOLVED, steps, cost, certificate, deferred=later)
+        return order_stream_plan(now, self.module.info_for, stream_producers(now, inst)), later
 
 
 def problem_size(compiled, operators: int | None) -> tuple[int, int, int, int | None]:

@@ -15,7 +15,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from ssr_compile.sim.problem import to_world  # noqa: E402
-from ssr_compile.sim.render import HEIGHT, PARTICLE_COLORS, WIDTH, project, render_image  # noqa: E402
+from ssr_compile.sim.render import HEIGHT, WIDTH, project, render_image  # noqa: E402
+
+from ssr_compile.belief.colors import object_colors  # noqa: E402
 
 from .kitchen import make_episode as _kitchen_episode  # noqa: E402
 
@@ -38,7 +40,7 @@ def frame(environment, agent, caption: str) -> np.ndarray:
             px = project(world, pw.poses[:, :3], "camera")
             w = pw.weights / max(float(pw.weights.max()), 1e-12)
             ax.scatter(
-                px[:, 0], px[:, 1], s=3 + 40 * w, c=PARTICLE_COLORS.get(obj, "white"),
+                px[:, 0], px[:, 1], s=3 + 40 * w, c=object_colors(known.beliefs)[obj],
                 alpha=0.55, edgecolors="none", label=obj,
             )  # fmt: skip
         ax.legend(loc="lower right", fontsize=7, framealpha=0.6, markerscale=1.5)
