@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT / "tests" / "fixtures" / "pddlstream"))
 
 import continuous_tamp as ctamp  # noqa: E402
 
-from ssr_compile.experiment import parse_seeds  # noqa: E402
+from ssr_compile.cli.options import seed_list  # noqa: E402
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file  # noqa: E402
 from ssr_compile.solver import SolveOptions, solve  # noqa: E402
 
@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
     options = dict(parse_option(o) for o in args.option)
     if args.algorithm:
         options["algorithm"] = args.algorithm
-    seeds = parse_seeds(args.seeds or ("0-24" if args.full else "0-9"))
+    seeds = seed_list(args.seeds or ("0-24" if args.full else "0-9"))
     rows = []
     print(HEADER, flush=True)
     for sub, problems, make, check in EXAMPLES.values():
