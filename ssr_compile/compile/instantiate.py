@@ -58,8 +58,8 @@ class Result:
     optimistic: bool = True
     value: float | None = None  # for functions
     # A real result's complexity (PDDLStream's): the largest of its domain facts' plus the
-    # number of draws its instance had made before it, plus one; the solver shows the planner
-    # only the real results whose complexity is at most the level
+    # number of draws its instance had made before it (a first draw: its inputs'); the solver
+    # shows the planner only the real results whose complexity is at most the level
     complexity: int = 0
 
 

@@ -103,8 +103,10 @@ class Evaluation:
 
     def _add(self, real: Result, index: int) -> None:
         """Keep the real result ``real``, its instance's draw number ``index`` (0 for the
-        first), with its complexity."""
-        real.complexity = self.complexity_of(real.domain) + index + 1
+        first), with its complexity: its domain's, plus one per draw its instance made before
+        (a first draw is as complex as its inputs: values drawn once are all seen at once, as
+        before; only the draws again of one instance wait for the level)."""
+        real.complexity = self.complexity_of(real.domain) + index
         for f in real.certified:
             if real.complexity < self.fact_complexity.get(f, real.complexity + 1):
                 self.fact_complexity[f] = real.complexity

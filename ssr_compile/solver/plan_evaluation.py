@@ -173,11 +173,6 @@ class StreamPlanEvaluation:
             ):
                 self.real_test_failed = True
             self._blame(res, redraw)
-            if redraw:
-                # A draw is taken again: the rest waits for the next pass, over the new
-                # value (continuous_tamp: the inverse kinematics and motions of a placement a
-                # test had just rejected were computed for every rejected placement)
-                break
         return all_ok, redraw
 
     def _evaluate(self, res: Result) -> bool:
