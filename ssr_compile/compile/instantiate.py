@@ -125,7 +125,6 @@ def instantiate(
     real_function_values: Mapping[S.FuncTerm, float] | None = None,
     exhausted: Iterable[Instance] = (),
     share: bool = False,
-    fact_levels: Mapping[S.Atom, int] | None = None,
 ) -> Instantiation:
     """Optimistically instantiate ``streams`` over ``problem`` up to ``level``.
 
@@ -139,9 +138,7 @@ def instantiate(
     ``disabled`` instances are not instantiated optimistically (they failed at this level);
     ``exhausted`` instances have no more outputs (their real results stay, no optimistic one
     is added); ``function_values`` maps a function name to its optimistic value;
-    ``real_function_values`` gives evaluated function terms their real value;
-    ``fact_levels``: the level of facts of ``evaluated`` results (the solver's complexity of
-    the values drawn: an instance over them is made that much deeper; absent: level 0).
+    ``real_function_values`` gives evaluated function terms their real value.
     """
     refuse_unsupported(streams)
     disabled = set(disabled) | set(exhausted)
@@ -167,10 +164,9 @@ def instantiate(
     evaluated = list(evaluated)
     real_objects: list[S.Typed] = []
     known = set(taken)
-    fact_levels = fact_levels or {}
     for res in evaluated:
         for atom in res.certified:
-            add_fact(atom, fact_levels.get(atom, 0))
+            add_fact(atom, 0)
             for a in atom.args:
                 if a.name not in known:
                     known.add(a.name)

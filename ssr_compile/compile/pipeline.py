@@ -132,7 +132,6 @@ def compile_problem(
     unit_cost: bool = False,
     share: bool = False,
     leaves: bool | None = None,
-    fact_levels: Mapping[S.Atom, int] | None = None,
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
     passes: list[PassResult] = [objects_as_constants(domain, problem)]
@@ -149,7 +148,6 @@ def compile_problem(
             function_values=function_values,
             real_function_values=real_function_values,
             share=share,
-            fact_levels=fact_levels,
         )
         passes.append(inst)
     source = passes[-1]

@@ -70,17 +70,13 @@ class FocusedLoop(SolverLoop):
         then tries one planner call at a time.  A first draw is seen at once (k = 1): hiding
         it too cost the shipped examples planner calls (progress: 4 -> 6; tamp2d-routes with
         deferral planned 21 times and found no plan), whose plans need the values drawn for
-        the stream plan that failed."""
+        the stream plan that failed.  (Real facts stay at level 0 in instantiation: placing
+        them at their complexity's level made the kitchen's stow, seed 1, take 137 planner
+        calls and 27 cycles instead of 78 and 24.)"""
         results, level = self.ev.results, self.level
         return results[: self.inherited] + [
             r for r in results[self.inherited :] if r.complexity <= level
         ]
-
-    def fact_levels(self):
-        """Real facts sit at the level of their complexity: an optimistic test over two
-        placements each drawn third is made at level 2, not 0 (the planner would otherwise try
-        each pair of the values it sees, a planner call per pair)."""
-        return self.ev.fact_complexity
 
     def run(self) -> Solution:
         """Compile, plan, evaluate the stream plan; until a plan's facts are all real, no plan

@@ -166,7 +166,6 @@ class SolverLoop:
             unit_cost=self.options.unit_cost,
             share=self.options.share,
             leaves=self.options.leaves,
-            fact_levels=self.fact_levels(),
         )
         self.last_compile = time.perf_counter() - started
         self.stats.compile_time += self.last_compile
@@ -177,10 +176,6 @@ class SolverLoop:
         (a loop may hide some: :meth:`FocusedLoop.visible_results
         <ssr_compile.solver.focused.FocusedLoop.visible_results>`)."""
         return self.ev.results
-
-    def fact_levels(self):
-        """The level of real facts in optimistic instantiation (``None``: all at 0)."""
-        return None
 
     def call_planner(self, compiled, remaining: float, bound: float | None):
         """One backend call, counted in the statistics: its result and the compiled problem's
