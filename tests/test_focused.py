@@ -242,9 +242,7 @@ def test_cheap_tests_are_evaluated_before_planning_and_no_plan_rests_on_a_failed
     _, lazy = run(problem, eager_tests=False)
     assert lazy.status == eager.status == "solved"
     assert eager.cost <= lazy.cost + 1e-9
-    # (lazily, a test over real values failing after the incumbent ends the search for a
-    # cheaper plan sooner: FocusedLoop's IMPROVEMENTS; blocked: 11 calls against 12)
-    assert eager.stats.planner_calls <= lazy.stats.planner_calls + 1
+    assert eager.stats.planner_calls <= lazy.stats.planner_calls
     values, b_pose = _values_with_b(module, problem)
     _simulate(eager.plan, values, {"a": values["pa"], "b": values[b_pose]})
     # a test over real inputs is evaluated before any plan can count on it: a stream plan's
