@@ -57,6 +57,10 @@ class Result:
     level: int
     optimistic: bool = True
     value: float | None = None  # for functions
+    # A real result's complexity (PDDLStream's): the largest of its domain facts' plus the
+    # number of draws its instance had made before it (a first draw: its inputs'); the solver
+    # shows the planner only the real results whose complexity is at most the level
+    complexity: int = 0
 
 
 @dataclass

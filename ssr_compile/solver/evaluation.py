@@ -36,6 +36,10 @@ class Evaluation:
         # False/None (failed)
         self.outcomes: dict[Instance, Any] = {}
         self.called = False  # did the last evaluate() call the stream (or reuse an outcome)?
+        # draws made per generator instance, and the least complexity of each fact a result
+        # of this solve certified (:meth:`complexity_of`; facts absent here have 0)
+        self.draws: dict[Instance, int] = {}
+        self.fact_complexity: dict[S.Atom, int] = {}
 
     def evaluate(self, res: Result, binding: dict[str, str]) -> bool:
         """Evaluate one optimistic result under ``binding`` (optimistic -> real names).
@@ -94,8 +98,23 @@ class Evaluation:
         self.outcomes[inst] = ok
         if ok:
             mapping = {p.name: v for p, v in zip(decl.inputs, inst.inputs)}
-            self.results.append(real_result(inst, (), decl, mapping, res.level))
+            self._add(real_result(inst, (), decl, mapping, res.level), 0)
         return ok
+
+    def _add(self, real: Result, index: int) -> None:
+        """Keep the real result ``real``, its instance's draw number ``index`` (0 for the
+        first), with its complexity: its domain's, plus one per draw its instance made before
+        (a first draw is as complex as its inputs: values drawn once are all seen at once, as
+        before; only the draws again of one instance wait for the level)."""
+        real.complexity = self.complexity_of(real.domain) + index
+        for f in real.certified:
+            if real.complexity < self.fact_complexity.get(f, real.complexity + 1):
+                self.fact_complexity[f] = real.complexity
+        self.results.append(real)
+
+    def complexity_of(self, facts) -> int:
+        """The largest complexity among ``facts`` (0: the problem's, or none)."""
+        return max((self.fact_complexity.get(f, 0) for f in facts), default=0)
 
     def _draw(self, res: Result, inst: Instance, fn, args: tuple, binding: dict) -> bool:
         """One more value of a generator: its outputs named, bound and certified."""
@@ -105,6 +124,8 @@ class Evaluation:
             kind = self.module.info_for(inst.stream).kind or "generator"
             gen = self.generators[inst] = Generator(fn, args, kind, inst.stream)
         self.tried.add(inst)
+        index = self.draws.get(inst, 0)
+        self.draws[inst] = index + 1
         out = gen.next()
         if gen.exhausted:
             self.exhausted.add(inst)
@@ -118,7 +139,7 @@ class Evaluation:
         names = tuple(self.values.name_for(v, p.name) for v, p in zip(out, decl.outputs))
         mapping = {p.name: v for p, v in zip(decl.inputs, inst.inputs)}
         mapping.update({p.name: n for p, n in zip(decl.outputs, names)})
-        self.results.append(real_result(inst, names, decl, mapping, res.level))
+        self._add(real_result(inst, names, decl, mapping, res.level), index)
         self.outcomes[inst] = names
         for opt, real in zip(res.outputs, names):
             binding[opt] = real

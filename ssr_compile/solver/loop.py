@@ -52,6 +52,9 @@ class SolverLoop:
             self.values = ValueTable(module.values, taken)
         self.ev = Evaluation(streams, module, self.values, self.stats)
         self.ev.results.extend(state.evaluated)
+        self.inherited = len(state.evaluated)  # ev.results[:inherited] came from earlier calls
+        for r in state.evaluated:  # their facts have complexity 0 in this call
+            self.ev.fact_complexity.update((f, 0) for f in r.certified)
         self.say = options.progress or (lambda msg: None)
         self.optimistic_values = {
             f.name: module.info_for(f.name).optimistic_value
@@ -153,7 +156,7 @@ class SolverLoop:
             self.problem,
             caps=self.backend.capabilities,
             level=self.level,
-            evaluated=self.ev.results,
+            evaluated=self.visible_results(),
             disabled=self.ev.tried,
             exhausted=self.ev.exhausted,
             function_values=self.function_estimates(),
@@ -167,6 +170,12 @@ class SolverLoop:
         self.last_compile = time.perf_counter() - started
         self.stats.compile_time += self.last_compile
         return compiled
+
+    def visible_results(self) -> list[Result]:
+        """The real results the optimistic problem of this level is built on: all of them
+        (a loop may hide some: :meth:`FocusedLoop.visible_results
+        <ssr_compile.solver.focused.FocusedLoop.visible_results>`)."""
+        return self.ev.results
 
     def call_planner(self, compiled, remaining: float, bound: float | None):
         """One backend call, counted in the statistics: its result and the compiled problem's

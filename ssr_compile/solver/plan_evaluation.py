@@ -85,6 +85,8 @@ class StreamPlanEvaluation:
         self.position = {id(r): i for i, r in enumerate(ordered)}
         self.rejected_limit = self._rejected_limits()
         self.rejected = False  # did a test of this stream plan reject a draw?
+        # did a test over real values only (no output of this stream plan) fail?
+        self.real_test_failed = False
         self.ok = False
 
     def _rejected_limits(self) -> dict[int, int]:
@@ -166,6 +168,10 @@ class StreamPlanEvaluation:
             failed.update(res.outputs)
             failed_facts.update(res.certified)
             self.say(f"  {res.instance} failed")
+            if res.instance.kind == "test" and not any(
+                x in self.producer for x in res.instance.inputs
+            ):
+                self.real_test_failed = True
             self._blame(res, redraw)
         return all_ok, redraw
 
@@ -214,18 +220,30 @@ class StreamPlanEvaluation:
             blamed = [self.producer[x] for x in res.instance.inputs if x in self.producer]
             blamed.sort(key=lambda r: (self._changes(r), -self.position[id(r)]))
             if kind == "test":
-                for r in blamed:
+                # An earlier value first, of the draw with the most values: a value drawn anew
+                # meets every earlier value of its partners before either draws again, and
+                # the one with the fewest values draws next (below) -- k values each give
+                # k * k pairs.  (Rebinding the draw changed least starved the other: once
+                # one placement had many values, all in the region's middle where no partner
+                # fits, only its partner drew.)
+                for r in sorted(blamed, key=lambda r: -self._values(r)):
                     earlier = self._earlier_value(r, res)
                     if earlier is not None and all(r is not x for x in redraw):
                         self.rebind[id(r)] = earlier
                         self.rebinds[id(r)] = self.rebinds.get(id(r), 0) + 1
                         redraw.append(r)
                         return
+            if kind == "test":
+                blamed.sort(key=lambda r: (self._values(r), self.again.get(id(r), 0)))
             redraw += [
                 r
                 for r in self._to_redraw(blamed, self.rejected_limit)[:1]
                 if all(r is not x for x in redraw)
             ]
+
+    def _values(self, r: Result) -> int:
+        """The values ``r`` drew in this evaluation."""
+        return len(self.values_drawn.get(id(r), ()))
 
     def _changes(self, r: Result) -> int:
         return self.again.get(id(r), 0) + self.rebinds.get(id(r), 0)
