@@ -84,7 +84,8 @@ class SolverLoop:
         }
 
     def run(self) -> Solution:
-        raise NotImplementedError
+        """The algorithm's loop: each registered algorithm (``dispatch.LOOPS``) gives its own."""
+        raise NotImplementedError(f"{type(self).__name__} does not define run()")
 
     def finish(self, status, plan=None, cost=None, certificate=(), deferred=(), message=""):
         self.stats.total_time = time.monotonic() - self.start
