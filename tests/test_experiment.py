@@ -547,3 +547,56 @@ def test_seed_lists_are_folded():
     assert X.seed_list([5, 0, 1, 2, 7, 8, 3]) == "0-3,5,7-8"
     assert X.seed_list([]) == "–"
     assert X.median([3.0, 1.0, 2.0, 10.0]) == 2.5
+
+
+def test_report_publishes_the_table_between_the_marks_of_pages(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    out.mkdir()
+    recs = [_record("inspect", "both", s, True, 2.0 + s) for s in range(3)]
+    (out / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in recs))
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    page = docs / "experiments.md"
+    page.write_text(
+        "# Experiments\n\nintro\n\n<!-- table-of-record -->\nan old table\n"
+        "<!-- /table-of-record -->\n\nWhy ours differs.\n"
+    )
+    readme = tmp_path / "README.md"
+    readme.write_text("# Tool\n<!-- table-of-record -->\n<!-- /table-of-record -->\nend\n")
+    argv = ["report", str(out), "--into", str(page), "--into", str(readme)]
+    assert run_cli(argv) == 0
+    table = (out / "table.md").read_text()
+    text = page.read_text()
+    # the page's own text is kept, the old table replaced by the sweep's (without its title)
+    assert text.startswith("# Experiments\n\nintro\n\n<!-- table-of-record -->\n")
+    assert text.endswith("<!-- /table-of-record -->\n\nWhy ours differs.\n")
+    assert "an old table" not in text and "# Table I:" not in text
+    row = next(x for x in table.splitlines() if x.startswith("| **Inspect** | ours"))
+    assert row in text and row in readme.read_text()
+    # the plot beside the first page, linked from each page by its own relative path
+    assert (docs / "table1.png").stat().st_size > 1000
+    assert "](table1.png)" in text and "](docs/table1.png)" in readme.read_text()
+    # published again: the same page (the marks are kept)
+    assert run_cli(argv) == 0
+    assert page.read_text() == text
+
+
+@pytest.mark.parametrize(
+    "body, found",
+    [
+        ("no marks\n", "found 0 line(s) <!-- table-of-record -->"),
+        ("<!-- /table-of-record -->\n<!-- table-of-record -->\n", "before"),
+        ("<!-- table-of-record -->\n<!-- table-of-record -->\n<!-- /table-of-record -->\n", ":2"),
+    ],
+)
+def test_report_refuses_a_page_without_its_marks_and_writes_nothing(tmp_path, capsys, body, found):
+    out = tmp_path / "sweep"
+    out.mkdir()
+    (out / "episodes.jsonl").write_text(json.dumps(_record("inspect", "both", 0, True, 2.0)) + "\n")
+    page = tmp_path / "page.md"
+    page.write_text(body)
+    assert run_cli(["report", str(out), "--into", str(page)]) == 2
+    err = capsys.readouterr().err
+    assert str(page) in err and found in err and "Traceback" not in err
+    assert page.read_text() == body
+    assert not (out / "table.md").exists() and not (tmp_path / "table1.png").exists()

@@ -226,6 +226,16 @@ def _configure_report(p: argparse.ArgumentParser) -> None:
         metavar="OUT",
         help="write the table (and, for several DIRs, their merged episodes) here instead",
     )
+    p.add_argument(
+        "--into",
+        action="append",
+        default=[],
+        metavar="PAGE",
+        help="also publish the table in this Markdown page (repeatable), between its lines "
+        "'<!-- table-of-record -->' and '<!-- /table-of-record -->' (the rest of the page is "
+        "kept), with table1.png written beside the first PAGE; e.g. --into "
+        "docs/experiments.md --into README.md",
+    )
 
 
 def run_report(args: argparse.Namespace) -> int:
@@ -246,12 +256,14 @@ def run_report(args: argparse.Namespace) -> int:
     )
     X.check_report_outputs(args.dirs[0] if alone else args.output, journal=not alone)
     if alone:
-        table, plot, text = write_report(args.dirs[0])
+        table, plot, text = write_report(args.dirs[0], into=args.into)
     else:
         command = " ".join(["ssr-compile report", *args.dirs, "-o", args.output])
-        table, plot, text = write_report(args.output, command, sources=args.dirs)
+        table, plot, text = write_report(args.output, command, sources=args.dirs, into=args.into)
     print(text)
     print(f"wrote {table} and {plot}", file=sys.stderr)
+    for page in args.into:
+        print(f"published the table in {page}", file=sys.stderr)
     return 0
 
 

@@ -4,6 +4,7 @@ layout, ours next to the paper's, and per-cell details) and ``DIR/table1.png``."
 from __future__ import annotations
 
 import json
+import os
 import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -16,6 +17,10 @@ from .statistics import cells, groups
 
 TABLE_FILE = "table.md"
 PLOT_FILE = "table1.png"
+# The lines of a Markdown page between which ``ssr-compile report --into PAGE`` writes the
+# table (:func:`publish_table`): the page's own text around them is kept.
+BEGIN_MARK = "<!-- table-of-record -->"
+END_MARK = "<!-- /table-of-record -->"
 
 
 def fmt_time(t: float) -> str:
@@ -241,13 +246,16 @@ def write_report(
     command: str | None = None,
     sources: list[str | Path] | None = None,
     say: Callable[[str], None] | None = None,
+    into: list[str | Path] | None = None,
 ) -> tuple[Path, Path, str]:
     """Rebuild ``table.md`` and ``table1.png`` from ``episodes.jsonl`` alone.  With
     ``sources`` (sweep folders), their episodes merged -- the last folder's record of a task,
     variant and seed wins -- are written to ``out_dir/episodes.jsonl`` first, so that the
     merged folder is a report of its own; the commands recorded in the sources' tables are
     kept in the new one.  Lines of an episodes.jsonl that are not records are skipped, said
-    (``say``, default: standard error) and noted in the table."""
+    (``say``, default: standard error) and noted in the table.  ``into``: Markdown pages to
+    publish the table in as well (:func:`publish_table`), the plot written beside the first;
+    all files are written as a unit, or none."""
     from ..files import Content, write_files_atomically
 
     out = Path(out_dir)
@@ -290,8 +298,59 @@ def write_report(
     text = render_table(records, command, notes)
     files[out / TABLE_FILE] = text
     files[out / PLOT_FILE] = lambda tmp: render_plot(records, tmp)
+    if into:
+        pages = [Path(x) for x in into]
+        plot = pages[0].parent / PLOT_FILE
+        for page in pages:
+            files[page] = publish_table(page, text, plot)
+        files[plot] = lambda tmp: render_plot(records, tmp)
     write_files_atomically(files)  # the merged episodes, the table and its plot: as a unit
     return out / TABLE_FILE, out / PLOT_FILE, text
+
+
+def publish_table(page: str | Path, table: str, plot: str | Path) -> str:
+    """``page`` (Markdown) with the lines between :data:`BEGIN_MARK` and :data:`END_MARK`
+    replaced by ``table`` (its title line dropped: the page has its own headings) and a link
+    to ``plot``; the page's other lines are kept.  A page without exactly one pair of marks,
+    in that order, is bad input (nothing is written)."""
+    page = Path(page)
+    try:
+        text = page.read_text(encoding="utf-8")
+    except OSError as e:
+        raise SSRError(
+            f"cannot read the page to publish into: {e.strerror}", file=str(page)
+        ) from None
+    lines = text.split("\n")
+    begins = [i for i, x in enumerate(lines) if x.strip() == BEGIN_MARK]
+    ends = [i for i, x in enumerate(lines) if x.strip() == END_MARK]
+    if len(begins) != 1 or len(ends) != 1 or ends[0] < begins[0]:
+        where = begins[1] if len(begins) > 1 else ends[1] if len(ends) > 1 else None
+        found = (
+            f"{len(begins)} line(s) {BEGIN_MARK} and {len(ends)} line(s) {END_MARK}"
+            if len(begins) != 1 or len(ends) != 1
+            else f"{END_MARK} before {BEGIN_MARK}"
+        )
+        raise SSRError(
+            f"found {found}; expected one line {BEGIN_MARK} and, below it, one line {END_MARK}, "
+            "between which the table is written",
+            file=str(page),
+            line=None if where is None else where + 1,
+        )
+    body = table.rstrip("\n").split("\n")
+    if body and body[0].startswith("# "):
+        body = body[1:]
+        while body and not body[0].strip():
+            body = body[1:]
+    link = os.path.relpath(Path(plot).resolve(), page.resolve().parent).replace(os.sep, "/")
+    section = [
+        "<!-- written by `ssr-compile report --into`: edit outside these marks -->",
+        "",
+        *body,
+        "",
+        f"![Table I, ours beside the paper's]({link})",
+        "",
+    ]
+    return "\n".join(lines[: begins[0] + 1] + section + lines[ends[0] :])
 
 
 def check_report_outputs(out_dir: str | Path, option: str = "-o", journal: bool = False) -> None:
