@@ -151,14 +151,17 @@ def main(argv: list[str] | None = None) -> int:
                 print(row_text(r), flush=True)
                 mine.append(r)
             rows += mine
-            solved = sum(r["solved"] for r in mine)
+            solved = sum(r["solved"] and r["valid"] is not False for r in mine)
+            invalid = sum(r["valid"] is False for r in mine)
             worst = max(r["time"] for r in mine)
 
             def med(key: str, mine=mine) -> float:
                 return statistics.median(r[key] for r in mine)
 
             print(
-                f"{problem:<13} median: solved {solved}/{len(mine)}, time {med('time'):.2f} s "
+                f"{problem:<13} median: solved {solved}/{len(mine)}"
+                + (f" ({invalid} invalid)" if invalid else "")
+                + f", time {med('time'):.2f} s "
                 f"(worst {worst:.2f}), planner calls {med('planner_calls'):g}, stream calls "
                 f"{med('stream_calls'):g}, objects {med('objects'):g}",
                 flush=True,
