@@ -7,11 +7,10 @@ Problems: continuous_tamp's ``tight(N)`` for N = 1, 2, 3, 4, 6, 8 (two goal bloc
 (blocks on a row of 9 cells); discrete_belief's ``noisy`` (run.py's problem), ``observable``,
 ``deterministic`` and ``det-obs`` (its other settings; nothing is sampled, every seed gives the
 same run, so only the first seed is run); advanced/defer's ``defer(1)`` (run.py's) and
-``defer(3)``. The generators and streams are in ``tests/fixtures/pddlstream/``; the domain and
+``defer(3)``.  The generators and streams are in ``tests/fixtures/pddlstream/``; the domain and
 stream files are read in place from the shared corpus (``../shared/corpus`` or ``$SSR_CORPUS``,
 then ``pddlstream-examples/examples``), and the script stops with a message when it is absent.
-Figures, no assertions; each solve runs in
-this process, one at a time.
+Figures, no assertions; each solve runs in this process, one at a time.
 
 Run: python bench/pddlstream_examples.py [--seeds 0-9 | --full] [--only NAME ...] [--time-limit S]
      [--algorithm NAME] [--option KEY=VALUE ...] [--json OUT]
