@@ -133,24 +133,10 @@ class StreamPlanEvaluation:
         failed_facts: set[S.Atom] = set()
         all_ok = True
         redraw: list[Result] = []
-        # Outputs of draws a test rejected beside another draw of this stream plan, queued to
-        # draw again, and of what depends on them: not evaluated in this pass -- the value
-        # comes back (bound again, :meth:`_earlier_value`) beside its partner's next values,
-        # and what depends on it is evaluated then, if it fits (continuous_tamp, two blocks
-        # into a region with one unit of slack: the kinematics and motions of each rejected
-        # placement were 40 of 138 stream calls).  A draw rejected against real values only is
-        # not bound again: what depends on it is evaluated at once, as before (a later plan
-        # that moves the occluder may use it).
-        doomed: set[str] = set()
         for res in self.ordered:
             if time.monotonic() >= self.deadline:
                 return None
             rid = id(res)
-            if doomed and any(x in doomed for x in res.instance.inputs):
-                doomed.update(res.outputs)
-                self.settled.pop(rid, None)
-                all_ok = False
-                continue
             if rid in self.settled:
                 if not self.settled[rid]:
                     all_ok = False
@@ -187,9 +173,6 @@ class StreamPlanEvaluation:
             ):
                 self.real_test_failed = True
             self._blame(res, redraw)
-            drawn_inputs = {id(self.producer[x]) for x in res.instance.inputs if x in self.producer}
-            if res.instance.kind == "test" and len(drawn_inputs) > 1:
-                doomed.update(o for r in redraw for o in r.outputs)
         return all_ok, redraw
 
     def _evaluate(self, res: Result) -> bool:
