@@ -47,7 +47,7 @@ def spots(c):
         yield (f"s{i}",)
 
 
-def run(domain: str, predicate: str, fn, objects="", init=""):
+def run(domain: str, predicate: str, fn, objects="", init="", algorithm="focused"):
     calls = []
 
     def recorded(*args):
@@ -61,12 +61,13 @@ def run(domain: str, predicate: str, fn, objects="", init=""):
         parse_stream_file(STREAMS.format(predicate=predicate)),
         parse_problem(PROBLEM.format(objects=objects, init=init)),
         module,
-        SolveOptions(time_limit=30),
+        SolveOptions(time_limit=30, algorithm=algorithm),
     )
     return sol, calls
 
 
-def test_a_predicate_used_negated_is_checked_before_the_plan_relies_on_it():
+@pytest.mark.parametrize("algorithm", ["focused", "adaptive"])
+def test_a_predicate_used_negated_is_checked_before_the_plan_relies_on_it(algorithm):
     # the obstacle o1 is near s1 only: parking on s1 (the first spot drawn) is unsafe
     sol, calls = run(
         NEGATED,
@@ -74,6 +75,7 @@ def test_a_predicate_used_negated_is_checked_before_the_plan_relies_on_it():
         lambda o, s: s == "s1",
         objects="o1",
         init="(Obstacle o1)",
+        algorithm=algorithm,
     )
     assert sol.solved, sol.message
     assert [(s.name, s.values) for s in sol.plan] == [("park", ("c1", "s2"))]
@@ -81,8 +83,10 @@ def test_a_predicate_used_negated_is_checked_before_the_plan_relies_on_it():
     assert len(calls) == len(set(calls))  # each instance evaluated once
 
 
-def test_a_predicate_used_positively_is_assumed_true_then_checked():
-    sol, calls = run(POSITIVE, "(:predicate (Free ?s) (Spot ?s))", lambda s: s != "s1")
+@pytest.mark.parametrize("algorithm", ["focused", "adaptive"])
+def test_a_predicate_used_positively_is_assumed_true_then_checked(algorithm):
+    free = lambda s: s != "s1"  # noqa: E731
+    sol, calls = run(POSITIVE, "(:predicate (Free ?s) (Spot ?s))", free, algorithm=algorithm)
     assert sol.solved, sol.message
     assert [(s.name, s.values) for s in sol.plan] == [("park", ("c1", "s2"))]
     assert calls[:2] == [("s1",), ("s2",)]
