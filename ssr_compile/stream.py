@@ -444,23 +444,24 @@ def _brief(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def call_test(fn: Callable, args: tuple, name: str) -> bool:
+def call_test(fn: Callable, args: tuple, name: str, what: str = "test stream") -> bool:
     """A test stream's answer: True or False (a numpy bool counts); anything else is an error
-    of the stream (a string such as "False" is not taken as true)."""
+    of the stream (a string such as "False" is not taken as true).  ``what``: how errors name
+    it (a stream-file ``:predicate`` is checked alike)."""
     try:
         value = fn(*args)
     except Exception as e:
-        raise StreamError(f"test stream '{name}' raised {type(e).__name__}: {e}") from e
+        raise StreamError(f"{what} '{name}' raised {type(e).__name__}: {e}") from e
     except SystemExit as e:
-        raise _exited(f"test stream '{name}'", e) from None
+        raise _exited(f"{what} '{name}'", e) from None
     if isinstance(value, bool):
         return value
     kind = type(value)
     if kind.__module__ == "numpy" and kind.__name__ in ("bool_", "bool"):
         return bool(value)
     raise StreamError(
-        f"test stream '{name}' returned {_brief(value)} ({kind.__name__}); "
-        "a test stream must return True or False"
+        f"{what} '{name}' returned {_brief(value)} ({kind.__name__}); "
+        f"a {what} must return True or False"
     )
 
 

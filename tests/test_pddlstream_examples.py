@@ -5,10 +5,9 @@ slack), discrete_tamp's ``shift_one(2)`` and ``shift_all(3)`` and advanced/defer
 its defaults, and each plan is replayed against the example's world -- for continuous_tamp the
 1-D geometry (placements inside their regions, no overlap, the gripper where each action needs
 it), for discrete_tamp a row of cells, for defer poses in a plane; the goal at the end.
-discrete_belief's plans are replayed on the beliefs; the solver does not evaluate its stream
-file's ``(:predicate BCollision ...)``, so its plans move objects into occupied locations (the
-test says so: a strict xfail).  Plans are checked, not times (``bench/pddlstream_examples.py``
-measures those)."""
+discrete_belief's plans are replayed on the beliefs: its stream file's ``(:predicate
+BCollision ...)`` keeps moves out of occupied locations.  Plans are checked, not times
+(``bench/pddlstream_examples.py`` measures those)."""
 
 from __future__ import annotations
 
@@ -162,12 +161,6 @@ def test_the_belief_check_keeps_moves_out_of_occupied_locations():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="the solver never evaluates a stream file's :predicate (BCollision), so the "
-    "domain's Unsafe never holds and the plan moves o1 onto o2",
-)
 def test_discrete_belief_plans_around_occupied_locations():
     sol = solve_example("discrete_belief", dbelief, "det-obs", 0, time_limit=30)
     assert sol.solved, sol.message

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 from .. import syntax as S
 from ..errors import InstanceCapReached, UnsupportedError
 from ..formulas import atoms, unify
+from .predicates import optimistic_truth, predicate_tests
 from .result import PassResult
 
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
@@ -79,6 +80,10 @@ class Instantiation(PassResult):
     saturated: bool = True  # False when the level limit cut instantiation short
     # shared optimistic object -> every result that outputs it (``share=True``)
     shared: dict[str, list[Result]] = field(default_factory=dict)
+    # stream predicates optimistically false: each instance whose domain holds and whose value
+    # is not known yet, by its atom (a plan relying on the atom's absence has it checked)
+    negated: dict[S.Atom, Result] = field(default_factory=dict)
+    unknown: frozenset[str] = frozenset()  # the names of those predicates
 
     def optimistic_objects(self) -> set[str]:
         return set(self.objects)
@@ -95,6 +100,9 @@ def declare_stream_predicates(domain: S.Domain, streams: S.StreamFile | None) ->
             for a in atoms(formula):
                 if a.pred not in declared and a.pred != "=":
                     extra.setdefault(a.pred, len(a.args))
+    for p in streams.predicates:
+        if p.name not in declared:
+            extra.setdefault(p.name, len(p.params))
     for r in streams.rules:
         for a in atoms(r.certified):
             if a.pred not in declared and a.pred != "=":
@@ -184,6 +192,9 @@ def instantiate(
         out.results.append(res)
 
     schemas = [(s, "test" if s.is_test else "stream") for s in streams.streams]
+    # Stream predicates: those optimistically true are tests certifying their atom
+    truth = optimistic_truth(domain, streams, problem)
+    schemas += [(p, "test") for p in predicate_tests(streams) if truth[p.name]]
     # Semi-naive: an instance first possible at depth d has its deepest domain fact at level
     # d - 1, so depth d only joins through the facts that reached level d - 1 (``fresh``);
     # the first depth joins through every real fact.
@@ -280,12 +291,32 @@ def instantiate(
             out.functions[term] = res
             values.append(S.InitValue(term, S.Num(value)))
 
+    _negated_predicates(streams, truth, index, levels, disabled, out)
+
     initial = {f for f in problem.init if isinstance(f, S.Atom)}
     all_facts = [a for a in levels if a not in initial]
     init = list(problem.init) + sorted(all_facts, key=_fact_order) + values
     objects = problem.objects + tuple(real_objects) + tuple(new_objects)
     out.problem = replace(problem, objects=objects, init=tuple(init))
     return out
+
+
+def _negated_predicates(streams, truth, index, levels, disabled, out: Instantiation) -> None:
+    """The instances of the stream predicates optimistically false whose domain holds (at any
+    level) and whose value is unknown (``disabled``: evaluated): nothing is certified, but a
+    plan relying on the absence of one of their atoms has them checked."""
+    out.unknown = frozenset(name for name, value in truth.items() if not value)
+    for p in streams.predicates:
+        if truth[p.name]:
+            continue
+        for binding, dom_facts in _matches(p.params, p.domain, index, levels):
+            args = tuple(binding[t.name] for t in p.params)
+            inst = Instance(p.name, args, "test")
+            if inst in disabled:
+                continue
+            lvl = 1 + max((levels[f] for f in dom_facts), default=0)
+            atom = S.Atom(p.name, tuple(S.Const(a) for a in args))
+            out.negated.setdefault(atom, Result(inst, (), (), tuple(dom_facts), lvl))
 
 
 def real_function_terms(
@@ -307,11 +338,13 @@ def real_instances(
     functions: Iterable[str] | None = None,
     tests: Iterable[str] | None = None,
     streams_with_outputs: Iterable[str] = (),
+    predicates: bool = False,
 ) -> list[Instance]:
     """The instances of the cost functions ``functions`` and of the tests ``tests`` (``None``:
-    all of them), and of the streams with outputs named in ``streams_with_outputs``, whose
-    domain holds in the real facts alone: the problem's and those of the ``evaluated``
-    results.  Functions first, each in the order of a join over the facts."""
+    all of them), and of the streams with outputs named in ``streams_with_outputs`` (and with
+    ``predicates``, of the stream predicates, as tests), whose domain holds in the real facts
+    alone: the problem's and those of the ``evaluated`` results.  Functions first, each in the
+    order of a join over the facts."""
     wanted_functions = None if functions is None else set(functions)
     wanted_tests = None if tests is None else set(tests)
     wanted_streams = set(streams_with_outputs)
@@ -347,6 +380,9 @@ def real_instances(
         kind = "test" if stream.is_test else "stream"
         for binding, _facts in _matches(stream.inputs, stream.domain, index, levels):
             out.append(Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind))
+    for p in streams.predicates if predicates else ():
+        for binding, _facts in _matches(p.params, p.domain, index, levels):
+            out.append(Instance(p.name, tuple(binding[t.name] for t in p.params), "test"))
     return out
 
 

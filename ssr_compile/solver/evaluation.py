@@ -11,6 +11,7 @@ from typing import Any
 
 from .. import syntax as S
 from ..compile.instantiate import Instance, Result, ground_atom, real_instances
+from ..compile.predicates import predicate_tests
 from ..errors import StreamError, StreamFailure
 from ..stream import Generator, StreamsModule, ValueTable, call_function, call_test
 from .results import Statistics
@@ -23,6 +24,10 @@ class Evaluation:
         self, streams: S.StreamFile, module: StreamsModule, values: ValueTable, stats: Statistics
     ):
         self.decl = {s.name: s for s in streams.streams}
+        self.decl.update((p.name, p) for p in predicate_tests(streams))
+        # each stream predicate's optimistic value (set by the solver's loop): a check of one
+        # succeeds when the predicate has that value
+        self.expect: dict[str, bool] = {}
         self.functions = {f.name: f for f in streams.functions}
         self.module = module
         self.values = values
@@ -93,10 +98,14 @@ class Evaluation:
 
     def _call_test(self, res: Result, inst: Instance, fn, args: tuple) -> bool:
         decl = self.decl[inst.stream]
-        ok = call_test(fn, args, inst.stream)
+        expect = self.expect.get(inst.stream)  # None: a test stream, else a predicate
+        what = "test stream" if expect is None else "predicate"
+        value = ok = call_test(fn, args, inst.stream, what)
+        if expect is not None:
+            ok = value == expect
         self.exhausted.add(inst)  # deterministic: never retried
         self.outcomes[inst] = ok
-        if ok:
+        if value:
             mapping = {p.name: v for p, v in zip(decl.inputs, inst.inputs)}
             self._add(real_result(inst, (), decl, mapping, res.level), 0)
         return ok
@@ -184,12 +193,13 @@ def evaluate_eagerly(
     ev: Evaluation,
     eager_streams: set[str] = frozenset(),
 ) -> None:
-    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``), and the
-    streams whose info says ``eager`` (one draw), whose domain holds in the real facts and
-    that have no outcome yet (nor, for a stream, a draw at this level or an end)."""
+    """Evaluate the cheap cost-function terms (``names``) and tests (``tests``), the stream
+    predicates, and the streams whose info says ``eager`` (one draw), whose domain holds in
+    the real facts and that have no outcome yet (nor, for a stream, a draw at this level or
+    an end)."""
     found = real_instances(
         streams, problem, ev.results, functions=names, tests=tests,
-        streams_with_outputs=eager_streams,
+        streams_with_outputs=eager_streams, predicates=True,
     )  # fmt: skip
     for inst in found:
         if inst in ev.outcomes:

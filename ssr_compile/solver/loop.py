@@ -9,6 +9,7 @@ import time
 from .. import syntax as S
 from ..compile.instantiate import Instantiation, Result
 from ..compile.pipeline import compile_problem
+from ..compile.predicates import optimistic_truth
 from ..errors import InstanceCapReached
 from ..planners import fd as _default_backend  # noqa: F401 - the default, loaded with the solver
 from ..planners import get_planner
@@ -51,6 +52,7 @@ class SolverLoop:
             taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
             self.values = ValueTable(module.values, taken)
         self.ev = Evaluation(streams, module, self.values, self.stats)
+        self.ev.expect = optimistic_truth(domain, streams, problem)
         self.ev.results.extend(state.evaluated)
         self.inherited = len(state.evaluated)  # ev.results[:inherited] came from earlier calls
         for r in state.evaluated:  # their facts have complexity 0 in this call
@@ -119,9 +121,9 @@ class SolverLoop:
     def evaluate_cheap_functions(self) -> None:
         """The cheap cost functions and tests over real arguments, once per new real result
         (a test that passes adds facts: again until none does)."""
-        while (self.eager or self.eager_tests or self.eager_streams) and len(
-            self.ev.results
-        ) != self.eager_seen:
+        while (
+            self.eager or self.eager_tests or self.eager_streams or self.streams.predicates
+        ) and len(self.ev.results) != self.eager_seen:
             self.eager_seen = len(self.ev.results)
             evaluate_eagerly(
                 self.streams,
@@ -196,8 +198,9 @@ class SolverLoop:
         """The planner's plan over the optimistic problem's names, its preimage, the
         instantiation and the stream plan: the optimistic results the plan needs."""
         plan = compiled.map_plan(result.actions or [])
-        pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan)
         inst = compiled.instantiation
+        unknown = inst.unknown if inst else frozenset()
+        pre = plan_preimage(compiled.source_domain, compiled.source_problem, plan, unknown)
         needed = stream_plan(inst, pre, plan) if inst else []
         return plan, pre, inst, needed
 
@@ -214,7 +217,8 @@ class SolverLoop:
         :func:`~ssr_compile.solver.deferral.reschedule_stream_plan`): the results to evaluate
         now, in order, and those deferred -- or the solution itself when nothing is left to
         evaluate now."""
-        deferrable = lambda s: self.module.info_for(s).deferrable  # noqa: E731
+        checks = self.ev.expect  # a stream predicate's check is never deferred
+        deferrable = lambda s: s not in checks and self.module.info_for(s).deferrable  # noqa: E731
         now, later = reschedule_stream_plan(needed, pre, plan, inst, deferrable, self.defer)
         if not now:
             deferred = {o for r in later for o in r.outputs}

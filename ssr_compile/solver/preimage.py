@@ -38,15 +38,20 @@ class Preimage:
     per_step: list[set[S.Atom]] = field(default_factory=list)
     per_step_costs: list[set[S.FuncTerm]] = field(default_factory=list)
     goal_facts: set[S.Atom] = field(default_factory=set)
+    # Atoms of stream predicates not known yet whose absence the plan relies on
+    negated: set[S.Atom] = field(default_factory=set)
 
 
 class _SupportTracker:
-    def __init__(self, domain: S.Domain, objects: list[str], static: set[str]):
+    def __init__(self, domain: S.Domain, objects: list[str], static: set[str], unknown=frozenset()):
         self.axioms: dict[str, list[S.Axiom]] = defaultdict(list)
         for ax in domain.axioms:
             self.axioms[ax.name].append(ax)
         self.objects = objects
         self.static = static
+        # Stream predicates false until evaluated: an absent atom of one is supported by its
+        # negation (to be checked), and it binds no variable (absent atoms may hold later)
+        self.unknown = unknown
         self.state: set[S.Atom] = set()
         self.index: dict[str, list[S.Atom]] = defaultdict(list)
         self.cache: dict[tuple[S.Atom, bool], tuple[bool, frozenset]] = {}
@@ -76,11 +81,14 @@ class _SupportTracker:
                         return False, frozenset()
                     support |= sup
                 return True, frozenset(support)
+            found = None
             for part in f.args:
                 ok, sup = self.holds(part, negate)
-                if ok:
+                if ok and not (self.unknown and _checks(sup)):
                     return True, sup
-            return False, frozenset()
+                if ok and found is None:  # true only while unchecked values hold: the last resort
+                    found = sup
+            return (True, found) if found is not None else (False, frozenset())
         if isinstance(f, S.Imply):
             return self.holds(S.Or((S.Not(f.left), f.right)), negate)
         if isinstance(f, S.Exists | S.Forall):
@@ -117,6 +125,8 @@ class _SupportTracker:
             truth = present != negate
             # A true static fact supports the condition; absent facts need no stream.
             support = frozenset({a}) if (present and a.pred in self.static) else frozenset()
+            if negate and not present and a.pred in self.unknown:
+                support = frozenset({S.Not(a)})
             result = (truth, support if truth else frozenset())
         self.cache[key] = result
         return result
@@ -160,7 +170,12 @@ class _SupportTracker:
         """Atoms of the state (not derived, not equalities) that must all be true for ``f``
         (negated if ``negate``) to be true."""
         if isinstance(f, S.Atom):
-            if not negate and f.pred != "=" and f.pred not in self.axioms:
+            if (
+                not negate
+                and f.pred != "="
+                and f.pred not in self.axioms
+                and f.pred not in self.unknown
+            ):
                 out.append(f)
         elif isinstance(f, S.Not):
             self._guards(f.arg, not negate, out)
@@ -230,13 +245,16 @@ def _apply(
             costs.append(effect.value)
 
 
-def plan_preimage(domain: S.Domain, problem: S.Problem, plan: Plan) -> Preimage:
-    """Simulate ``plan`` and collect the static facts its preconditions and goal rest on."""
+def plan_preimage(
+    domain: S.Domain, problem: S.Problem, plan: Plan, unknown: frozenset[str] = frozenset()
+) -> Preimage:
+    """Simulate ``plan`` and collect the static facts its preconditions and goal rest on
+    (and the absent atoms of the stream predicates ``unknown`` they rest on)."""
     schemas = {a.name: a for a in domain.actions}
     static = {p.name for p in domain.predicates} - fluent_predicates(domain)
     static |= {f.pred for f in problem.init if isinstance(f, S.Atom)} - fluent_predicates(domain)
     objects = [o.name for o in problem.objects] + [c.name for c in domain.constants]
-    ev = _SupportTracker(domain, objects, static)
+    ev = _SupportTracker(domain, objects, static, unknown)
     state = {f for f in problem.init if isinstance(f, S.Atom)}
     out = Preimage()
     for i, (name, args) in enumerate(plan, start=1):
@@ -254,6 +272,7 @@ def plan_preimage(domain: S.Domain, problem: S.Problem, plan: Plan) -> Preimage:
             raise PlanInvalid(
                 f"step {i}: the precondition of ({name} {' '.join(args)}) does not hold"
             )
+        support = _split(support, out)
         out.per_step.append(set(support))
         out.static_facts |= support
         adds: set = set()
@@ -267,9 +286,22 @@ def plan_preimage(domain: S.Domain, problem: S.Problem, plan: Plan) -> Preimage:
     ok, support = ev.holds(problem.goal)
     if not ok:
         raise PlanInvalid("the goal does not hold at the end of the plan")
+    support = _split(support, out)
     out.goal_facts = set(support)
     out.static_facts |= support
     return out
+
+
+def _checks(support: frozenset) -> bool:
+    """Whether ``support`` relies on the absence of atoms not known yet."""
+    return any(isinstance(x, S.Not) for x in support)
+
+
+def _split(support: frozenset, out: Preimage) -> frozenset:
+    """The atoms of ``support``; its negations go to ``out.negated``."""
+    negated = {x for x in support if isinstance(x, S.Not)}
+    out.negated.update(x.arg for x in negated)
+    return support - negated if negated else support
 
 
 def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
@@ -312,6 +344,10 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
         for v in args:
             if v in inst.objects:
                 need(inst.objects[v])
+    for atom in sorted(pre.negated, key=str):  # the absences the plan relies on, checked
+        res = inst.negated.get(atom)
+        if res is not None:
+            need(res)
     for term in sorted(pre.cost_terms, key=str):
         res = inst.functions.get(term)
         if res is not None:
