@@ -13,8 +13,29 @@ from . import options
 from .registry import register
 
 
+def _task(text: str) -> str:
+    """A kitchen task's name, or a task file's path (checked by :func:`_check_task`)."""
+    if text.lower() in TASKS:
+        return text.lower()
+    if text.endswith(".toml"):
+        return text
+    raise argparse.ArgumentTypeError(
+        f"invalid choice: '{text}' (choose from {', '.join(TASKS)}, or a task file FILE.toml)"
+    )
+
+
+def _check_task(task: str) -> None:
+    """A task file is bad input before anything is drawn (file and key named)."""
+    if task.endswith(".toml"):
+        from ssr_compile.sim.task_file import load_task_file
+
+        load_task_file(task)
+
+
 def _task_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("task", metavar="TASK", choices=TASKS, help="one of: " + ", ".join(TASKS))
+    p.add_argument(
+        "task", metavar="TASK", type=_task, help="one of: " + ", ".join(TASKS) + "; or FILE.toml"
+    )
     p.add_argument(
         "--seed",
         type=options.seed,
@@ -59,6 +80,7 @@ def _configure_render(p: argparse.ArgumentParser) -> None:
 def run_render(args: argparse.Namespace) -> int:
     from ssr_compile.sim.render import render_task
 
+    _check_task(args.task)
     path = _write_png(
         args.output, lambda tmp: render_task(args.task, args.seed, tmp, view=args.view)
     )
@@ -107,6 +129,7 @@ def run_belief_plot(args: argparse.Namespace) -> int:
     if args.particles < 1:
         raise SSRError("--particles must be at least 1")
     _check_png(args.output)  # before the task is built
+    _check_task(args.task)
     task = make_task(args.task, args.seed)
     try:
         rng = np.random.default_rng(args.seed)
