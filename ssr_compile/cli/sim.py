@@ -150,6 +150,46 @@ def run_belief_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _configure_tasks(p: argparse.ArgumentParser) -> None:
+    p.description = (
+        "Kitchen task files.  'generate' writes a member of the family of harder kitchens: "
+        "N movable objects, K boxes that may hide the block (the episode's seed picks the one "
+        "in front of it), the other blocks on the counter or in the drawers as the seed draws "
+        "them; Cook-like (cook the block) or Inspect-like (the block into the bottom drawer)."
+    )
+    sub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    g = sub.add_parser("generate", help="write a task file of the family (N objects, K hiders)")
+    g.add_argument("--kind", choices=("cook", "inspect"), default="cook", help="default cook")
+    g.add_argument("--objects", type=int, default=3, metavar="N", help="2 to 12 (default 3)")
+    g.add_argument("--hiders", type=int, default=2, metavar="K", help="1 to 6, < N (default 2)")
+    g.add_argument("-o", "--output", metavar="FILE.toml", help="write here (default: print)")
+
+
+def run_tasks(args: argparse.Namespace) -> int:
+    from ssr_compile.sim.task_family import generate
+
+    try:
+        text = generate(args.kind, args.objects, args.hiders)
+    except ValueError as e:
+        raise SSRError(f"tasks generate: {e}") from None
+    if args.output is None:
+        print(text, end="")
+        return 0
+    out = Path(args.output)
+    if out.suffix != ".toml":
+        raise SSRError(f"the output must be a .toml file, got '{args.output}'")
+    check_output(out, "-o")
+    write_atomically(out, text)
+    print(f"wrote {out} ({args.kind}, {args.objects} objects, {args.hiders} hiders)")
+    return 0
+
+
+register(
+    "tasks",
+    "kitchen task files: generate a harder kitchen (N objects, K that may hide the block)",
+    _configure_tasks,
+    run_tasks,
+)
 register(
     "render",
     "draw a kitchen task's scene (camera or top view) as a PNG",
