@@ -225,3 +225,50 @@ def test_experiment_and_pictures_take_task_files(tmp_path, capsys):
 
 
 GOOD_TEXT = "".join(f"{k} = {v}\n" for k, v in GOOD.items())
+
+
+def test_the_family_generator_writes_valid_task_files(tmp_path, capsys):
+    from ssr_compile.sim.task_family import generate
+
+    path = tmp_path / "family.toml"
+    for kind in ("cook", "inspect"):
+        for n in range(2, 13):
+            for k in range(1, min(6, n - 1) + 1):
+                path.write_text(generate(kind, n, k))
+                spec = load_task_file(path)
+                assert len(spec.objects) == n and len(spec.hide[1]) == k
+                assert spec.hide[0] == "block" and spec.name == f"{kind}_n{n}_k{k}"
+                assert len({o.name for o in spec.objects}) == n
+    out = tmp_path / "c.toml"
+    assert main(["tasks", "generate", "--objects", "3", "--hiders", "2", "-o", str(out)]) == 0
+    assert load_task_file(out).hide == ("block", ("cracker_box", "sugar_box"))
+    assert main(["tasks", "generate", "--objects", "13", "--hiders", "2"]) == 2
+    assert "objects must be from 2 to 12" in capsys.readouterr().err
+    assert main(["tasks", "generate", "--objects", "3", "--hiders", "3"]) == 2
+    assert main(["tasks", "generate", "--objects", "3", "--hiders", "7"]) == 2
+
+
+@pytest.mark.slow
+def test_a_generated_kitchen_hides_the_block_behind_one_of_its_boxes(tmp_path):
+    from ssr_compile.sim.perception import visible_fraction
+    from ssr_compile.sim.task_family import generate
+
+    path = tmp_path / "c.toml"
+    path.write_text(generate("cook", 6, 4))
+    hiders = {"cracker_box", "sugar_box", "cracker_box_2", "sugar_box_2"}
+    for seed in (0, 1):
+        task = make_task(path, seed)
+        try:
+            state = task.world.true_state()
+            assert set(state["objects"]) == hiders | {"block", "block_2"}
+            assert all(state["objects"][h]["surface"] == "counter" for h in hiders)
+            assert visible_fraction(task.world, "block") <= 0.1
+            assert task.goal == (("Cooked", "block"), ("StoveOff",))
+        finally:
+            task.close()
+    a, b = make_task(path, 3), make_task(path, 3)  # seeded
+    try:
+        assert a.world.true_state() == b.world.true_state()
+    finally:
+        a.close()
+        b.close()
