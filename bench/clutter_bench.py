@@ -11,6 +11,7 @@ saw (facts / objects), and the peak resident memory of an episode's process tree
 
     python bench/clutter_bench.py --objects 2 --hiders 1 --seeds 0      # smoke run
     python bench/clutter_bench.py --kind cook --objects 2 4 6 8 12 --hiders 1 2 4 6 --seeds 0-9
+    python bench/clutter_bench.py --full    # N 2-12 (even), K 1, 2, 4, 6, seeds 0-9: days
 """
 
 from __future__ import annotations
@@ -77,12 +78,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=float, default=600.0, help="planning time per episode, s")
     ap.add_argument("--max-cycles", type=int, default=100)
     ap.add_argument("--jsonl", help="append one JSON line per episode to this file")
+    ap.add_argument(
+        "--full",
+        action="store_true",
+        help="N = 2, 4, ..., 12, K = 1, 2, 4, 6, seeds 0-9, budget 600 s (days of CPU)",
+    )
     ap.add_argument("--one", nargs=2, metavar=("FILE", "SEED"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.one:
         out = one(args.one[0], int(args.one[1]), args.variant, args.budget, args.max_cycles)
         print(json.dumps(out))
         return 0
+    if args.full:
+        args.objects, args.hiders = [2, 4, 6, 8, 10, 12], [1, 2, 4, 6]
+        args.seeds, args.budget = list(range(10)), 600.0
 
     from ssr_compile.sim.task_family import generate
 
