@@ -86,8 +86,12 @@ class TaskSpec:
     text: str | None = field(default=None, repr=False)
 
     def shapes(self) -> dict[str, tuple[tuple[float, float, float], tuple[float, ...]]]:
-        """``World(objects=...)`` of this task."""
-        return {o.name: (o.half, o.color) for o in self.objects}
+        """``World(objects=...)`` of this task: by kind in :data:`~.world.OBJECTS`' order, then
+        in the file's (the bodies' order, which the streams iterate in, is the one a world of
+        every kind had before task files, whatever order a file places its objects in)."""
+        kinds = list(OBJECTS)
+        ordered = sorted(self.objects, key=lambda o: kinds.index(o.kind))  # stable
+        return {o.name: (o.half, o.color) for o in ordered}
 
     def error(self, key: str, message: str) -> SSRError:
         """Bad input at ``key`` (dotted: ``objects.block.on``) of this task's file."""

@@ -40,6 +40,9 @@ def test_shipped_task_files_give_the_reference_worlds(name):
             assert list(task.prior) == sorted(task.prior)  # the order the old code gave
             assert _plain(task.goal) == ref["goal"]
             assert task.name == name
+            # the bodies in the order the old world built them (the streams iterate in it)
+            kinds = ("block", "sugar_box", "cracker_box")
+            assert list(task.world.objects) == [k for k in kinds if k in ref["latent"]["objects"]]
         finally:
             task.close()
 
