@@ -41,7 +41,6 @@ from .world import DRAWER_TRAVEL, DRAWERS, PLACE_GAP, World
 DOMAIN = "kitchen"
 PARTICLES_PER_SURFACE = 100
 FIXED = ("counter", "stove")
-TALL = ("sugar_box", "cracker_box")  # taller than a drawer's clearance: counter only
 ABOVE = (("top_drawer", "bottom_drawer"),)  # an open top drawer hides the bottom one
 LOCALIZED_STD = 0.02  # a belief is localized: x, y spread at most 2 cm ...
 ON_PROB = 0.95  # ... with at least this mass on one surface
@@ -255,10 +254,11 @@ def state_problem(
     for o in sorted(set(task.prior) | set(known.beliefs)):
         obj(o)
         init.append(_atom("graspable", o))
-        if o in TALL:
+        tall = task.world.is_tall(o)  # taller than a drawer's clearance: counter only
+        if tall:
             init.append(_atom("tall", o))
         for s in surfaces:
-            if o not in TALL or s == "counter":
+            if not tall or s == "counter":
                 init.append(_atom("placeable", o, s))
         if o in known.cooked:
             init.append(_atom("cooked", o))

@@ -1,9 +1,12 @@
-"""The four tasks of the paper's appendix (Inspect, Stow, Swap, Cook), generated from a seed.
+"""A kitchen task generated from a seed: the world in its latent initial state, the prior and
+the goal, as a task file states them (``sim/task_file.py``).  The four tasks of the paper's
+appendix (Inspect, Stow, Swap, Cook) are the shipped files ``domains/pddl/kitchen/tasks/``.
 
 A :class:`Task` gives the world in its latent initial state, the prior belief as plain data
-(``object -> [(surface, weight), ...]``: uniform over those surfaces), the latent state
-(``world.true_state()`` at the start, for evaluation only) and the goal as PDDL-like tuples:
-``("On", obj, surface)``, ``("Closed", drawer)``, ``("Cooked", obj)``, ``("StoveOff",)``.
+(``object -> [(surface, weight), ...]``: uniform over each surface, with its weight), the
+latent state (``world.true_state()`` at the start, for evaluation only) and the goal as
+PDDL-like tuples: ``("On", obj, surface)``, ``("Closed", drawer)``, ``("Cooked", obj)``,
+``("StoveOff",)``.
 
 * Inspect: goal block in the bottom drawer and the bottom drawer closed; prior uniform over
   both drawers; the block is in the bottom drawer (drawers closed).
@@ -15,11 +18,17 @@ A :class:`Task` gives the world in its latent initial state, the prior belief as
   cooks the block, then off again); prior block uniform over the counter (and so are the
   boxes); the cracker box and the sugar box are on the counter, one of them hiding the block
   from the camera.
+
+The seed's draws, in order: the robot's base about :data:`~.world.PARK_BASE`; then each object
+not among the hiders, in the file's order (its surface when it has several, then its pose);
+then which hider hides the target, its pose, and the other hiders' (all placements again when
+no pose of that hider hides the target).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -29,10 +38,12 @@ from ssr_compile.catalog import TASKS
 from .geometry import yaw_of
 from .perception import visible_fraction
 from .robot import ARM_TUCK
+from .task_file import TaskSpec, load_task_file, shipped_task_file
 from .world import DRAWER_TRAVEL, DRAWERS, PARK_BASE, World
 
 Goal = tuple[tuple[str, ...], ...]
 CLOSED_TOL = 0.005
+HIDE_ATTEMPTS = 100  # placements of all objects before a task's hide is given up
 
 
 @dataclass
@@ -43,6 +54,7 @@ class Task:
     prior: dict[str, list[tuple[str, float]]]
     goal: Goal
     latent: dict = field(default_factory=dict)
+    spec: TaskSpec | None = None  # the task file it was generated from
 
     def goal_satisfied(self, state: dict | None = None) -> bool:
         """The goal holds in ``state`` (default: the world's true state)."""
@@ -134,12 +146,12 @@ def _graspable(world: World, rng: np.random.Generator, p) -> bool:
     return False
 
 
-def _place_occluder(world: World, rng: np.random.Generator, box: str) -> bool:
-    """Put ``box`` on the counter between the camera and the block, facing the camera."""
+def _place_occluder(world: World, rng: np.random.Generator, box: str, target: str) -> bool:
+    """Put ``box`` on the counter between the camera and ``target``, facing the camera."""
     from .samplers import KitchenStreams, ObjPose
 
     ks = KitchenStreams(world, rng)
-    (bx, by, _), _ = world.object_pose("block")
+    (bx, by, _), _ = world.object_pose(target)
     u = np.array([bx, by]) - np.asarray(world.camera_eye[:2])
     u /= np.linalg.norm(u)
     for _ in range(50):
@@ -151,18 +163,39 @@ def _place_occluder(world: World, rng: np.random.Generator, box: str) -> bool:
         if not ks.placement_valid(p):
             continue
         world.place_object(box, "counter", p.rel)
-        if visible_fraction(world, "block") <= 0.1:
+        if visible_fraction(world, target) <= 0.1:
             return True
         world.remove_object(box)
     return False
 
 
-def make_task(name: str, seed: int, *, gui: bool = False) -> Task:
-    """Generate task ``name`` (one of :data:`TASKS`) from ``seed``."""
-    if name not in TASKS:
-        raise ValueError(f"unknown task {name!r}; expected one of {TASKS}")
+def make_task(task: str | Path | TaskSpec, seed: int, *, gui: bool = False) -> Task:
+    """Generate ``task`` from ``seed``: one of :data:`TASKS` (its shipped file), a task file's
+    path (``.toml``) or a :class:`~.task_file.TaskSpec`.  A task file that is bad input, or
+    whose objects the seed cannot place, raises :class:`~ssr_compile.errors.SSRError`."""
+    if isinstance(task, TaskSpec):
+        spec = task
+    elif isinstance(task, Path) or str(task).endswith(".toml"):
+        spec = load_task_file(task)
+    elif task in TASKS:
+        spec = load_task_file(shipped_task_file(task))
+    else:
+        raise ValueError(f"unknown task {task!r}; expected one of {TASKS} or a task file (.toml)")
     rng = np.random.default_rng(seed)
-    world = World(gui=gui)
+    world = World(gui=gui, objects=spec.shapes())
+    try:
+        _generate(spec, world, rng, seed)
+    except BaseException:
+        world.close()
+        raise
+    out = Task(spec.name, seed, world, {o: list(e) for o, e in spec.prior.items()}, spec.goal)
+    out.spec = spec
+    out.latent = world.true_state()
+    return out
+
+
+def _generate(spec: TaskSpec, world: World, rng: np.random.Generator, seed: int) -> None:
+    """The latent state of ``spec`` drawn from ``rng`` (the order: the module doc)."""
     for obj in world.objects:
         world.remove_object(obj)
     for d in DRAWERS:
@@ -170,39 +203,37 @@ def make_task(name: str, seed: int, *, gui: bool = False) -> Task:
     base = np.asarray(PARK_BASE) + rng.uniform(-0.1, 0.1, size=3) * (1.0, 1.0, 0.5)
     world.set_base(tuple(float(v) for v in base))
     world.set_arm(ARM_TUCK)
-    both = [("top_drawer", 0.5), ("bottom_drawer", 0.5)]
-    if name == "inspect":
-        _place_random(world, rng, "block", "bottom_drawer")
-        prior, goal = (
-            {"block": both},
-            (("On", "block", "bottom_drawer"), ("Closed", "bottom_drawer")),
-        )
-    elif name == "swap":
-        _place_random(world, rng, "block", "top_drawer")
-        prior, goal = (
-            {"block": both},
-            (("On", "block", "bottom_drawer"), ("Closed", "bottom_drawer")),
-        )
-    elif name == "stow":
-        world.set_drawer("top_drawer", DRAWER_TRAVEL)
-        _place_random(world, rng, "sugar_box", "top_drawer")
-        _place_random(world, rng, "block", "counter")
-        prior = {"block": [("counter", 1.0)], "sugar_box": [("top_drawer", 1.0)]}
-        goal = (("On", "block", "top_drawer"), ("Closed", "top_drawer"))
-    else:  # cook
-        prior = {o: [("counter", 1.0)] for o in ("block", "cracker_box", "sugar_box")}
-        goal = (("Cooked", "block"), ("StoveOff",))
-        for _ in range(100):
-            for o in ("block", "cracker_box", "sugar_box"):
-                world.remove_object(o)
-            _place_random(world, rng, "block", "counter")
-            first = ("cracker_box", "sugar_box")[int(rng.integers(2))]
-            other = "sugar_box" if first == "cracker_box" else "cracker_box"
-            if _place_occluder(world, rng, first):
-                _place_random(world, rng, other, "counter")
-                break
-        else:  # pragma: no cover - the counter is large enough for this never to happen
-            raise RuntimeError("could not generate a Cook problem")
-    task = Task(name, seed, world, prior, goal)
-    task.latent = world.true_state()
-    return task
+    for d, q in spec.drawers.items():
+        world.set_drawer(d, q)
+    hiders = () if spec.hide is None else spec.hide[1]
+    objects = {o.name: o for o in spec.objects}
+
+    def place(name: str) -> None:
+        on = objects[name].on
+        surface = on[0] if len(on) == 1 else on[int(rng.integers(len(on)))]
+        try:
+            _place_random(world, rng, name, surface)
+        except RuntimeError:
+            raise spec.error(
+                f"objects.{name}",
+                f"with seed {seed}, {name} cannot be placed on {surface} without collision",
+            ) from None
+
+    for _ in range(HIDE_ATTEMPTS if spec.hide else 1):
+        for o in spec.objects:
+            world.remove_object(o.name)
+        for o in spec.objects:
+            if o.name not in hiders:
+                place(o.name)
+        if spec.hide is None:
+            return
+        target = spec.hide[0]
+        first = hiders[int(rng.integers(len(hiders)))]
+        if _place_occluder(world, rng, first, target):
+            for other in hiders:
+                if other != first:
+                    place(other)
+            return
+    raise spec.error(
+        "hide", f"with seed {seed}, none of {', '.join(hiders)} could hide {spec.hide[0]}"
+    )

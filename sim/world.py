@@ -50,13 +50,19 @@ SURFACE_MARGIN = 0.005
 PLACE_GAP = 1e-3  # objects rest this far above their support (no spurious contacts)
 COLLISION_TOL = 1e-4
 
-#: Objects: half extents (x, y, z) and colour.  The sugar box is taller than the top drawer's
-#: clearance (0.15) and both boxes are tall enough to hide the block from the camera.
+#: The kinds of objects the world can build: half extents (x, y, z) and colour.  The sugar box
+#: is taller than the top drawer's clearance (0.15) and both boxes are tall enough to hide the
+#: block from the camera.  A task names its objects and gives each a kind (``sim/task_file.py``);
+#: a world built without a list has one object of each kind, named after it.
 OBJECTS = {
     "block": ((0.02, 0.02, 0.02), (0.1, 0.8, 0.1, 1.0)),
     "sugar_box": ((0.045, 0.025, 0.09), (0.95, 0.85, 0.2, 1.0)),
     "cracker_box": ((0.08, 0.03, 0.105), (0.85, 0.15, 0.1, 1.0)),
 }
+
+#: An object taller than this (the top drawer's clearance) is tall: plans put it on the counter
+#: only (``sim/problem.py``).
+TALL_HEIGHT = 0.15
 
 CAMERA_EYE = (0.15, -0.25, 2.2)
 CAMERA_TARGET = (0.95, 0.1, 0.45)
@@ -105,6 +111,20 @@ def _boxes(
     return col, vis
 
 
+def surface_rects() -> dict[str, tuple[tuple[float, float], tuple[float, float], float]]:
+    """Each surface's placement rectangle ``(lo, hi, z)`` in its own frame (the counter, the
+    burner, and the part of each drawer that is out of the cabinet when it is fully open)."""
+    m = 0.03
+    out = {
+        "counter": ((CABINET_FRONT + m, 0.4 + m), (CABINET_BACK - m, 1.2 - m), COUNTER_TOP),
+        "stove": ((BURNER[0][0], BURNER[1][0]), (BURNER[0][1], BURNER[1][1]), BURNER_TOP),
+    }
+    inner = DRAWER_HALF_WIDTH - 0.01
+    for name in DRAWERS:
+        out[name] = ((0.01, -inner), (DRAWER_TRAVEL - 0.02, inner), 0.0)
+    return out
+
+
 def _span(lo: float, hi: float) -> tuple[float, float]:
     """(center, half extent) of an interval."""
     return (lo + hi) / 2.0, (hi - lo) / 2.0
@@ -116,9 +136,17 @@ def _box(x: Sequence[float], y: Sequence[float], z: Sequence[float]):
 
 
 class World:
-    """One kitchen in its own pybullet client (``p.DIRECT`` unless ``gui``)."""
+    """One kitchen in its own pybullet client (``p.DIRECT`` unless ``gui``).
 
-    def __init__(self, *, gui: bool = False) -> None:
+    ``objects``: name -> (half extents, colour) of the movable objects to build (default
+    :data:`OBJECTS`: one of each kind)."""
+
+    def __init__(
+        self,
+        *,
+        gui: bool = False,
+        objects: dict[str, tuple[tuple[float, float, float], tuple[float, ...]]] | None = None,
+    ) -> None:
         self.client = p.connect(p.GUI if gui else p.DIRECT)
         c = self.client
         if gui:
@@ -139,12 +167,14 @@ class World:
         # Objects
         self.objects: dict[str, int] = {}
         self.half_extents: dict[str, tuple[float, float, float]] = {}
-        for name, (half, rgba) in OBJECTS.items():
+        self.colors: dict[str, tuple[float, ...]] = {}
+        for name, (half, rgba) in (OBJECTS if objects is None else objects).items():
             col, vis = _boxes(c, [((0, 0, 0), half)])
             body = p.createMultiBody(0, col, vis, basePosition=(0, 0, -5), physicsClientId=c)
             self._color(body, -1, rgba)
             self.objects[name] = body
-            self.half_extents[name] = half
+            self.half_extents[name] = tuple(half)
+            self.colors[name] = tuple(rgba)
         self.body_names = {b: n for n, b in self.objects.items()}
         self.robot = Robot(c)
         self.surfaces = self._surfaces()
@@ -239,24 +269,20 @@ class World:
         return body
 
     def _surfaces(self) -> dict[str, SurfaceRegion]:
-        m = 0.03
-        out = {
-            "counter": SurfaceRegion(
-                "counter", self.counter, -1, (CABINET_FRONT + m, 0.4 + m),
-                (CABINET_BACK - m, 1.2 - m), COUNTER_TOP,
-            ),
-            "stove": SurfaceRegion(
-                "stove", self.stove, -1, (BURNER[0][0], BURNER[1][0]), (BURNER[0][1], BURNER[1][1]),
-                BURNER_TOP,
-            ),
-        }  # fmt: skip
-        inner = DRAWER_HALF_WIDTH - 0.01
-        for i, name in enumerate(DRAWERS):
-            # The part of the drawer that is out of the cabinet when it is fully open.
-            out[name] = SurfaceRegion(
-                name, self.cabinet, i, (0.01, -inner), (DRAWER_TRAVEL - 0.02, inner), 0.0
-            )
-        return out
+        frames = {"counter": (self.counter, -1), "stove": (self.stove, -1)}
+        frames.update({name: (self.cabinet, i) for i, name in enumerate(DRAWERS)})
+        return {
+            name: SurfaceRegion(name, *frames[name], lo, hi, z)
+            for name, (lo, hi, z) in surface_rects().items()
+        }
+
+    def shapes(self) -> dict[str, tuple[tuple[float, float, float], tuple[float, ...]]]:
+        """name -> (half extents, colour) of the movable objects (``World(objects=...)``)."""
+        return {n: (self.half_extents[n], self.colors[n]) for n in self.objects}
+
+    def is_tall(self, name: str) -> bool:
+        """Taller than :data:`TALL_HEIGHT` (the boxes): counter only for plans."""
+        return 2 * self.half_extents[name][2] > TALL_HEIGHT
 
     def close(self) -> None:
         self.robot.close()

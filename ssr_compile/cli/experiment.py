@@ -53,7 +53,8 @@ def _configure_experiment(p: argparse.ArgumentParser) -> None:
         metavar="T1,T2",
         help=f"tasks (rows): kitchen tasks ({','.join(KITCHEN_TASKS)}; the default once the "
         "kitchen has a closed-loop environment), shipped examples with an environment "
-        "(progress, belief-detect[:occluded|clear]) or example folders ([FOLDER][:PROBLEM])",
+        "(progress, belief-detect[:occluded|clear]), example folders ([FOLDER][:PROBLEM]) "
+        "or kitchen task files (FILE.toml)",
     )
     p.add_argument(
         "--variants",
@@ -143,6 +144,11 @@ def run_experiment(args: argparse.Namespace) -> int:
     variants = X.parse_variants(args.variants)
     seeds = options.seed_list(args.seeds)
     tasks = X.parse_tasks(args.tasks)
+    for task in tasks:
+        if task.problem is not None and task.problem.endswith(".toml"):
+            from ssr_compile.sim.task_file import load_task_file
+
+            load_task_file(task.problem)  # a bad kitchen task file: bad input, before any episode
     get_planner(args.planner)  # bad input before anything runs
     executor_name = "ray" if args.ray_address else args.executor
     from ssr_compile.policy import PolicySettings

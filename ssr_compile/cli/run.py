@@ -55,7 +55,8 @@ def _configure(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "target",
         metavar="TASK|FOLDER|NAME",
-        help=f"a kitchen task ({', '.join(KITCHEN_TASKS)}), a shipped example with an "
+        help=f"a kitchen task ({', '.join(KITCHEN_TASKS)}) or task file (FILE.toml), "
+        "a shipped example with an "
         "environment (progress, belief-detect), or an example folder whose example.toml "
         'names one (environment = "module:function")',
     )
@@ -141,6 +142,13 @@ def resolve(target: str, problem: str | None):
     """(example, problem) for a kitchen task name, a shipped example or a folder."""
     from ..examples import load_example
 
+    if target.endswith(".toml") and Path(target).name != "example.toml":
+        from ssr_compile.sim.task_file import load_task_file
+
+        if problem:
+            raise SSRError(f"'{target}' is a kitchen task file; --problem {problem} contradicts it")
+        load_task_file(target)  # bad input before anything runs
+        return load_example("kitchen"), target
     if target.lower() in KITCHEN_TASKS:
         if problem and problem.lower() != target.lower():
             raise SSRError(f"'{target}' is a kitchen task; --problem {problem} contradicts it")
@@ -174,6 +182,8 @@ def make_episode(example, problem: str | None, seed: int):
     name = f"environment factory {spec}"
     try:
         episode = factory(problem, seed)
+    except SSRError:  # a task file the seed cannot place: bad input, named
+        raise
     except TypeError as e:
         raise SSRError(f"the environment factory of '{example.name}' failed: {e}") from None
     except ValueError as e:

@@ -13,8 +13,29 @@ from . import options
 from .registry import register
 
 
+def _task(text: str) -> str:
+    """A kitchen task's name, or a task file's path (checked by :func:`_check_task`)."""
+    if text.lower() in TASKS:
+        return text.lower()
+    if text.endswith(".toml"):
+        return text
+    raise argparse.ArgumentTypeError(
+        f"invalid choice: '{text}' (choose from {', '.join(TASKS)}, or a task file FILE.toml)"
+    )
+
+
+def _check_task(task: str) -> None:
+    """A task file is bad input before anything is drawn (file and key named)."""
+    if task.endswith(".toml"):
+        from ssr_compile.sim.task_file import load_task_file
+
+        load_task_file(task)
+
+
 def _task_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("task", metavar="TASK", choices=TASKS, help="one of: " + ", ".join(TASKS))
+    p.add_argument(
+        "task", metavar="TASK", type=_task, help="one of: " + ", ".join(TASKS) + "; or FILE.toml"
+    )
     p.add_argument(
         "--seed",
         type=options.seed,
@@ -59,6 +80,7 @@ def _configure_render(p: argparse.ArgumentParser) -> None:
 def run_render(args: argparse.Namespace) -> int:
     from ssr_compile.sim.render import render_task
 
+    _check_task(args.task)
     path = _write_png(
         args.output, lambda tmp: render_task(args.task, args.seed, tmp, view=args.view)
     )
@@ -107,6 +129,7 @@ def run_belief_plot(args: argparse.Namespace) -> int:
     if args.particles < 1:
         raise SSRError("--particles must be at least 1")
     _check_png(args.output)  # before the task is built
+    _check_task(args.task)
     task = make_task(args.task, args.seed)
     try:
         rng = np.random.default_rng(args.seed)
@@ -127,6 +150,46 @@ def run_belief_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _configure_tasks(p: argparse.ArgumentParser) -> None:
+    p.description = (
+        "Kitchen task files.  'generate' writes a member of the family of harder kitchens: "
+        "N movable objects, K boxes that may hide the block (the episode's seed picks the one "
+        "in front of it), the other blocks on the counter or in the drawers as the seed draws "
+        "them; Cook-like (cook the block) or Inspect-like (the block into the bottom drawer)."
+    )
+    sub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    g = sub.add_parser("generate", help="write a task file of the family (N objects, K hiders)")
+    g.add_argument("--kind", choices=("cook", "inspect"), default="cook", help="default cook")
+    g.add_argument("--objects", type=int, default=3, metavar="N", help="2 to 12 (default 3)")
+    g.add_argument("--hiders", type=int, default=2, metavar="K", help="1 to 6, < N (default 2)")
+    g.add_argument("-o", "--output", metavar="FILE.toml", help="write here (default: print)")
+
+
+def run_tasks(args: argparse.Namespace) -> int:
+    from ssr_compile.sim.task_family import generate
+
+    try:
+        text = generate(args.kind, args.objects, args.hiders)
+    except ValueError as e:
+        raise SSRError(f"tasks generate: {e}") from None
+    if args.output is None:
+        print(text, end="")
+        return 0
+    out = Path(args.output)
+    if out.suffix != ".toml":
+        raise SSRError(f"the output must be a .toml file, got '{args.output}'")
+    check_output(out, "-o")
+    write_atomically(out, text)
+    print(f"wrote {out} ({args.kind}, {args.objects} objects, {args.hiders} hiders)")
+    return 0
+
+
+register(
+    "tasks",
+    "kitchen task files: generate a harder kitchen (N objects, K that may hide the block)",
+    _configure_tasks,
+    run_tasks,
+)
 register(
     "render",
     "draw a kitchen task's scene (camera or top view) as a PNG",

@@ -75,6 +75,11 @@ def resolve_task(name: str) -> Task:
     if name.lower() in TASKS:
         target, problem = "kitchen", name.lower()
         label = name.lower()
+    elif name.endswith(".toml") and Path(name).name != "example.toml":
+        # a kitchen task file (checked by the CLI: the toolkit does not import the simulator)
+        if not Path(name).is_file():
+            raise SSRError(f"--tasks: no task file '{name}'")
+        target, problem, label = "kitchen", str(Path(name).resolve()), name
     else:
         target, problem = name, None
         if ":" in name and not Path(name).exists():
@@ -85,8 +90,8 @@ def resolve_task(name: str) -> Task:
     if folder is None:
         known = ", ".join(TASKS)
         raise SSRError(
-            f"--tasks: unknown task '{name}'; expected a kitchen task ({known}), a shipped "
-            "example with an environment (progress, belief-detect[:PROBLEM]) or an example "
+            f"--tasks: unknown task '{name}'; expected a kitchen task ({known}) or task "
+            "file (.toml), a shipped example with an environment (progress, belief-detect[:PROBLEM]) or an example "
             "folder"
         )
     task = Task(label, str(folder.resolve()), problem)

@@ -155,9 +155,10 @@ class KitchenAgent:
         rng: np.random.Generator,
         *,
         model: ObservationModel | None = None,
+        shapes: dict | None = None,
     ) -> None:
         self.domain, self.streams = _kitchen_files()
-        world = World()
+        world = World(objects=shapes)  # the objects' shapes are known, never their poses
         for o in list(world.objects):
             world.remove_object(o)
         self.task = Task(name, seed, world, prior, goal)
@@ -361,12 +362,14 @@ def make_episode(
     gui: bool = False,
     **options: Any,
 ) -> Episode:
-    """An episode of ``task`` (one of ``inspect``, ``stow``, ``swap``, ``cook``) generated from
-    ``seed``: the true world, and an agent that knows the prior, the goal and its own
+    """An episode of ``task`` (one of ``inspect``, ``stow``, ``swap``, ``cook``, or a task file's
+    path, ``.toml``: ``sim/task_file.py``) generated from ``seed``: the true world, and an agent that knows the prior, the goal and its own
     configuration.  ``base_noise``/``yaw_noise``: std of a base motion's landing error (m, rad);
     ``p_fn``: the camera's false-negative rate."""
-    if task not in TASKS:
-        raise ValueError(f"unknown task {task!r}; expected one of {', '.join(TASKS)}")
+    if task not in TASKS and not str(task).endswith(".toml"):
+        raise ValueError(
+            f"unknown task {task!r}; expected one of {', '.join(TASKS)} or a task file (.toml)"
+        )
     if options:
         raise TypeError(f"unknown option(s) {', '.join(sorted(options))}")
     model = ObservationModel(p_fn=p_fn, sigma=MODEL.sigma)
@@ -378,9 +381,10 @@ def make_episode(
         model=model,
     )
     agent = KitchenAgent(
-        task, seed, true_task.prior, true_task.goal, np.random.default_rng([seed, 2]), model=model
-    )
-    return _KitchenEpisode(env, agent, f"kitchen-{task}-{seed}")
+        true_task.name, seed, true_task.prior, true_task.goal, np.random.default_rng([seed, 2]),
+        model=model, shapes=true_task.world.shapes(),
+    )  # fmt: skip
+    return _KitchenEpisode(env, agent, f"kitchen-{true_task.name}-{seed}")
 
 
 __all__ = ["KitchenAgent", "KitchenEnvironment", "KitchenObservation", "make_episode"]
