@@ -43,6 +43,7 @@ from typing import Any, Protocol, runtime_checkable
 from . import syntax as S
 from .catalog import VARIANTS
 from .episode_record import (
+    SPLIT,
     Cycle,
     EpisodeResult,
     UserCodeError,
@@ -297,6 +298,8 @@ class _CycleState:
     spent: dict[str, float] = field(default_factory=lambda: {"c": 0.0, "u": 0.0})
     streams_called: int = 0
     planners_called: int = 0
+    # the planning time's parts over both attempts (Cycle.planner_time ... compile_time)
+    split: dict[str, float] = field(default_factory=dict)
 
 
 class _Policy:
@@ -531,6 +534,8 @@ class _Policy:
         cycle.spent[key] += sol.stats.total_time
         cycle.streams_called += sum(s.calls for s in sol.stats.streams.values())
         cycle.planners_called += sol.stats.planner_calls
+        for part in SPLIT:
+            cycle.split[part] = cycle.split.get(part, 0.0) + getattr(sol.stats, part)
         return sol
 
     def act(
@@ -623,7 +628,7 @@ class _Policy:
             self.agent,
             cycle.start,
         )
-        for key, value in timings.items():
+        for key, value in (cycle.split | timings).items():
             setattr(record, key, value)
         if "execution_time" in timings:
             total = time.monotonic() - cycle.start - (timings["comparison_time"] or 0.0)
