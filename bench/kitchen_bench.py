@@ -8,8 +8,8 @@ episodes, constrained attempts that held, fallbacks.  ``--jsonl FILE`` saves eve
 Then the planning time's split per (task, variant), over every episode run: planner calls per
 cycle, and the mean seconds per cycle with their share of the planning time of Fast Downward's
 translator, its search, the rest of the planner calls (writing the task, the worker's round
-trip), stream evaluation, compiling the optimistic problems, and the rest (preimages,
-instantiation, the solver's own work).
+trip), stream evaluation, compiling the optimistic problems (stream instantiation included),
+and the rest (preimages, stream plans, the solver's own work).
 
     python bench/kitchen_bench.py                      # Inspect, variant both, seed 0 (< 1 min)
     python bench/kitchen_bench.py --full               # 4 tasks x 4 variants x seeds 0-9, 600 s

@@ -119,7 +119,7 @@ class Cycle:
     comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
     # Of planning_time (both attempts), from the solver's statistics: the planner calls
     # (the translator's and the search's shares of them apart), stream evaluation, compiling
-    # the optimistic problems.  The rest is the solver's own work (preimages, instantiation).
+    # the optimistic problems.  The rest is the solver's own work (preimages, stream plans).
     planner_time: float = 0.0
     translate_time: float = 0.0
     search_time: float = 0.0
