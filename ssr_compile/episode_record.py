@@ -97,6 +97,12 @@ def failure_text(observation: Any) -> str:
 SPLIT = ("planner_time", "translate_time", "search_time", "stream_time", "compile_time")
 
 
+def add_split(split: dict[str, float], stats) -> None:
+    """Add the parts of one solve's planning time (its ``Statistics``) to ``split``."""
+    for part in SPLIT:
+        split[part] = split.get(part, 0.0) + getattr(stats, part)
+
+
 @dataclass
 class Cycle:
     """One cycle of the policy, as logged."""

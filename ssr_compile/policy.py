@@ -43,10 +43,10 @@ from typing import Any, Protocol, runtime_checkable
 from . import syntax as S
 from .catalog import VARIANTS
 from .episode_record import (
-    SPLIT,
     Cycle,
     EpisodeResult,
     UserCodeError,
+    add_split,
     failed,
     failure_text,
     where,
@@ -290,7 +290,7 @@ def run_policy(
 @dataclass
 class _CycleState:
     """One cycle so far: its planning attempts' time (``"c"``: constrained, ``"u"``:
-    unconstrained), stream and planner calls, and how its constrained attempt went."""
+    unconstrained) and its parts, stream and planner calls, how its constrained attempt went."""
 
     index: int
     start: float
@@ -298,8 +298,7 @@ class _CycleState:
     spent: dict[str, float] = field(default_factory=lambda: {"c": 0.0, "u": 0.0})
     streams_called: int = 0
     planners_called: int = 0
-    # the planning time's parts over both attempts (Cycle.planner_time ... compile_time)
-    split: dict[str, float] = field(default_factory=dict)
+    split: dict[str, float] = field(default_factory=dict)  # Cycle.planner_time ... compile_time
 
 
 class _Policy:
@@ -534,8 +533,7 @@ class _Policy:
         cycle.spent[key] += sol.stats.total_time
         cycle.streams_called += sum(s.calls for s in sol.stats.streams.values())
         cycle.planners_called += sol.stats.planner_calls
-        for part in SPLIT:
-            cycle.split[part] = cycle.split.get(part, 0.0) + getattr(sol.stats, part)
+        add_split(cycle.split, sol.stats)
         return sol
 
     def act(
