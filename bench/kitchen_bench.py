@@ -5,6 +5,12 @@ PyBullet true world; success is the goal in the true state.  Prints one line per
 table per (task, variant): successes, mean cycles, mean planning time of the successful
 episodes, constrained attempts that held, fallbacks.  ``--jsonl FILE`` saves every episode.
 
+Then the planning time's split per (task, variant), over every episode run: planner calls per
+cycle, and the mean seconds per cycle with their share of the planning time of Fast Downward's
+translator, its search, the rest of the planner calls (writing the task, the worker's round
+trip), stream evaluation, compiling the optimistic problems (stream instantiation included),
+and the rest (preimages, stream plans, the solver's own work).
+
     python bench/kitchen_bench.py                      # Inspect, variant both, seed 0 (< 1 min)
     python bench/kitchen_bench.py --full               # 4 tasks x 4 variants x seeds 0-9, 600 s
     python bench/kitchen_bench.py --tasks inspect stow swap cook --variants neither \\
@@ -22,7 +28,44 @@ from dataclasses import replace
 from ssr_compile.streams.environments.kitchen import make_episode
 
 from ssr_compile.catalog import TASKS, VARIANTS
+from ssr_compile.episode_record import SPLIT
 from ssr_compile.policy import PolicySettings, run_policy
+
+# The split's columns: (heading, how to get its seconds from the sums of an episode's cycles).
+COLUMNS = (
+    ("translate", lambda t: t["translate_time"]),
+    ("search", lambda t: t["search_time"]),
+    ("planner other", lambda t: t["planner_time"] - t["translate_time"] - t["search_time"]),
+    ("streams", lambda t: t["stream_time"]),
+    ("compile", lambda t: t["compile_time"]),
+    ("rest", lambda t: t["planning_time"] - t["planner_time"] - t["stream_time"]
+     - t["compile_time"]),
+)  # fmt: skip
+
+
+def split(res) -> dict:
+    """An episode's planning time and its parts (sums over its cycles), with its planner calls."""
+    keys = ("planning_time", "planner_calls", *SPLIT)
+    return {k: round(sum(getattr(c, k) for c in res.cycles), 4) for k in keys}
+
+
+def print_split(rows: dict) -> None:
+    """Per (task, variant): planner calls per cycle, seconds per cycle and share per part."""
+    print()
+    print("planning time per cycle (all episodes): seconds, share of the planning time")
+    print(f"{'task':8s} {'variant':11s} {'cycles':>6s} {'calls/c':>7s} {'plan s/c':>8s}  "
+          + "  ".join(f"{h:>18s}" for h, _ in COLUMNS))  # fmt: skip
+    for (task, variant), ds in rows.items():
+        total = {k: sum(d["split"][k] for d in ds) for k in ds[0]["split"]}
+        cycles = sum(d["cycles"] for d in ds) or 1
+        plan = total["planning_time"]
+        cells = []
+        for _, get in COLUMNS:
+            part = get(total)
+            share = 100 * part / plan if plan > 0 else 0.0
+            cells.append(f"{part / cycles:8.3f} s {share:5.1f} %")
+        print(f"{task:8s} {variant:11s} {cycles:6d} {total['planner_calls'] / cycles:7.2f} "
+              f"{plan / cycles:8.3f}  " + "  ".join(f"{c:>18s}" for c in cells))  # fmt: skip
 
 
 def seeds(text: str) -> list[int]:
@@ -83,6 +126,7 @@ def main(argv: list[str] | None = None) -> int:
                 d["reason"] = res.reason
                 d["actions_executed"] = res.actions
                 d["wall"] = round(time.monotonic() - start, 2)
+                d["split"] = split(res)
                 rows.setdefault((task, variant), []).append(d)
                 print(
                     f"{task:8s} {variant:11s} seed {seed:2d}  "
@@ -107,6 +151,7 @@ def main(argv: list[str] | None = None) -> int:
         fb = sum(d["fallbacks"] for d in ds) / len(ds)
         print(f"{task:8s} {variant:11s} {len(ok):4d}/{len(ds):<4d} {cyc:7.1f} {plan:11.1f} "
               f"{held:5.1f} {fb:9.1f}")  # fmt: skip
+    print_split(rows)
     return 0
 
 

@@ -93,6 +93,16 @@ def failure_text(observation: Any) -> str:
     return str(message) if message else str(observation)
 
 
+# The parts of a cycle's planning time kept in its record (Statistics and Cycle fields).
+SPLIT = ("planner_time", "translate_time", "search_time", "stream_time", "compile_time")
+
+
+def add_split(split: dict[str, float], stats) -> None:
+    """Add the parts of one solve's planning time (its ``Statistics``) to ``split``."""
+    for part in SPLIT:
+        split[part] = split.get(part, 0.0) + getattr(stats, part)
+
+
 @dataclass
 class Cycle:
     """One cycle of the policy, as logged."""
@@ -113,6 +123,14 @@ class Cycle:
     constrained_time: float = 0.0  # planning time of the constrained attempt alone
     unconstrained_time: float = 0.0  # planning time of the unconstrained attempt alone
     comparison_time: float | None = None  # unconstrained time on a held cycle (measurement)
+    # Of planning_time (both attempts), from the solver's statistics: the planner calls
+    # (the translator's and the search's shares of them apart), stream evaluation, compiling
+    # the optimistic problems.  The rest is the solver's own work (preimages, stream plans).
+    planner_time: float = 0.0
+    translate_time: float = 0.0
+    search_time: float = 0.0
+    stream_time: float = 0.0
+    compile_time: float = 0.0
     plan: list[str] | None = None  # the whole plan of this cycle (its first action executed)
     observation: Any = None  # what the environment answered, as JSON data (``to_json``)
     failed: bool = False  # the execution failed: the observation's ``ok`` false (``failed``)

@@ -46,6 +46,7 @@ from .episode_record import (
     Cycle,
     EpisodeResult,
     UserCodeError,
+    add_split,
     failed,
     failure_text,
     where,
@@ -289,7 +290,7 @@ def run_policy(
 @dataclass
 class _CycleState:
     """One cycle so far: its planning attempts' time (``"c"``: constrained, ``"u"``:
-    unconstrained), stream and planner calls, and how its constrained attempt went."""
+    unconstrained) and its parts, stream and planner calls, how its constrained attempt went."""
 
     index: int
     start: float
@@ -297,6 +298,7 @@ class _CycleState:
     spent: dict[str, float] = field(default_factory=lambda: {"c": 0.0, "u": 0.0})
     streams_called: int = 0
     planners_called: int = 0
+    split: dict[str, float] = field(default_factory=dict)  # Cycle.planner_time ... compile_time
 
 
 class _Policy:
@@ -531,6 +533,7 @@ class _Policy:
         cycle.spent[key] += sol.stats.total_time
         cycle.streams_called += sum(s.calls for s in sol.stats.streams.values())
         cycle.planners_called += sol.stats.planner_calls
+        add_split(cycle.split, sol.stats)
         return sol
 
     def act(
@@ -623,7 +626,7 @@ class _Policy:
             self.agent,
             cycle.start,
         )
-        for key, value in timings.items():
+        for key, value in (cycle.split | timings).items():
             setattr(record, key, value)
         if "execution_time" in timings:
             total = time.monotonic() - cycle.start - (timings["comparison_time"] or 0.0)

@@ -369,3 +369,13 @@ def test_fd_translator_timeout_kills_the_started_search_too():
         except OSError:
             pass
     assert "downward" not in names, names
+
+
+def test_fd_reports_its_translation_and_search_within_the_call():
+    domain, problem = load("blocks", "blocks")
+    result = get_planner("fd").solve(domain, problem, time_limit=20)
+    assert result.solved
+    assert result.translate_time > 0 and result.search_time > 0
+    assert result.translate_time + result.search_time <= result.time
+    other = planner("pyperplan").solve(domain, problem, time_limit=20)
+    assert other.solved and other.translate_time == other.search_time == 0.0

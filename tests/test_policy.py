@@ -423,3 +423,16 @@ def test_an_unconstrained_attempt_is_capped_by_the_planning_budget_left(monkeypa
     assert limits[0][0] == pytest.approx(3.0)  # not unconstrained_time's 300 s
     for limit, left in limits:
         assert limit == pytest.approx(left, abs=1e-6)
+
+
+def test_a_cycle_splits_its_planning_time_into_planner_streams_and_compilation():
+    _, result = _progress(0, "both")
+    first = result.cycles[0]
+    assert first.planner_calls >= 1
+    assert 0 < first.translate_time + first.search_time <= first.planner_time
+    assert first.stream_calls == 0 or first.stream_time > 0
+    assert first.compile_time > 0
+    parts = first.planner_time + first.stream_time + first.compile_time
+    assert parts <= first.planning_time + 1e-6
+    assert result.as_dict()["planner_calls"] == sum(c.planner_calls for c in result.cycles)
+    assert first.as_dict()["translate_time"] == round(first.translate_time, 4)

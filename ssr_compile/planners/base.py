@@ -43,6 +43,10 @@ class PlanResult:
     # What a failed backend left behind (its child's traceback, a log's tail): shown by the
     # CLI's --debug, never in the one-line message.
     detail: str = ""
+    # Seconds of ``time`` spent translating the task (Fast Downward's translator) and
+    # searching (its search binary); 0 for a backend that does not tell its stages apart.
+    translate_time: float = 0.0
+    search_time: float = 0.0
 
     @property
     def solved(self) -> bool:

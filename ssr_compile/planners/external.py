@@ -33,7 +33,7 @@ import os
 import shutil
 import tempfile
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -71,6 +71,8 @@ class Job:
     time_limit: float
     cost_bound: float | None
     task: tuple[Domain, Problem]  # the task as syntax trees (for in-process readers)
+    # seconds per stage ("translate", "search") for the answer (PlanResult.translate_time...)
+    stages: dict[str, float] = field(default_factory=dict)
 
     def file(self, name: str) -> str:
         return os.path.join(self.dir, name)
@@ -176,11 +178,22 @@ class ExternalPlanner:
     ) -> PlanResult:
         clock = Clock(time_limit)
         folder = ""
+        stages: dict[str, float] = {}
 
         def result(status, message="", actions=None, cost=None, detail=""):
             if self.keep_files and folder:
                 message = f"{message} [files in {folder}]".strip()
-            return PlanResult(status, actions, cost, clock.elapsed(), self.name, message, detail)
+            return PlanResult(
+                status,
+                actions,
+                cost,
+                clock.elapsed(),
+                self.name,
+                message,
+                detail,
+                translate_time=stages.get("translate", 0.0),
+                search_time=stages.get("search", 0.0),
+            )
 
         self.before(domain, problem)
         refusal = self.refuse(domain, problem)
@@ -197,6 +210,7 @@ class ExternalPlanner:
             time_limit,
             cost_bound,
             (domain, problem),
+            stages,
         )
         try:
             task, renaming = self.prepare(domain, problem), None

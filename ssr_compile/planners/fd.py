@@ -27,6 +27,7 @@ import copy
 import importlib.util
 import math
 import os
+import time
 from pathlib import Path
 
 from ..compile.constraints import is_chained
@@ -249,11 +250,13 @@ class FastDownward(ExternalPlanner):
                 self._command(guess, plan_path), cwd=job.dir, log_path=search_log
             )
         try:
+            began = time.perf_counter()
             status, info = _TRANSLATOR.call(
                 (job.domain, job.problem, sas, invariants),
                 timeout=job.clock.remaining(),
                 log_path=log,
             )
+            job.stages["translate"] = time.perf_counter() - began
             if status == proc.TIMED_OUT:
                 raise Stop(TIMEOUT, f"translator exceeded the time limit of {job.time_limit:g} s")
             if status != proc.OK:
@@ -267,18 +270,22 @@ class FastDownward(ExternalPlanner):
             if info["unsolvable"]:
                 raise Stop(UNSOLVABLE, f"translator: {info['unsolvable']}")
             search = self._search_option(info, job.cost_bound)
-            if started is not None and search == guess:
-                code = started.finish(sas, job.clock.remaining())
-            else:
-                if started is not None:
-                    started.cancel()
-                code = proc.run_command(
-                    self._command(search, plan_path),
-                    job.clock.remaining(),
-                    cwd=job.dir,
-                    stdin_path=sas,
-                    log_path=search_log,
-                )
+            began = time.perf_counter()
+            try:
+                if started is not None and search == guess:
+                    code = started.finish(sas, job.clock.remaining())
+                else:
+                    if started is not None:
+                        started.cancel()
+                    code = proc.run_command(
+                        self._command(search, plan_path),
+                        job.clock.remaining(),
+                        cwd=job.dir,
+                        stdin_path=sas,
+                        log_path=search_log,
+                    )
+            finally:
+                job.stages["search"] = time.perf_counter() - began
         finally:
             if started is not None:
                 started.cancel()

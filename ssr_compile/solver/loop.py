@@ -188,6 +188,8 @@ class SolverLoop:
         )
         self.stats.planner_calls += 1
         self.stats.planner_time += result.time
+        self.stats.translate_time += getattr(result, "translate_time", 0.0)
+        self.stats.search_time += getattr(result, "search_time", 0.0)
         size = problem_size(compiled, getattr(self.backend, "last_operators", None))
         self.stats.sizes.append(size)
         return result, size

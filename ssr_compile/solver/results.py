@@ -26,6 +26,9 @@ class Statistics:
     levels: list[int] = field(default_factory=list)
     planner_calls: int = 0
     planner_time: float = 0.0
+    # of planner_time: the backends' translation and search (PlanResult.translate_time...)
+    translate_time: float = 0.0
+    search_time: float = 0.0
     stream_time: float = 0.0
     total_time: float = 0.0
     streams: dict[str, StreamStats] = field(default_factory=dict)
@@ -44,6 +47,8 @@ class Statistics:
             "levels": self.levels,
             "planner_calls": self.planner_calls,
             "planner_time": round(self.planner_time, 4),
+            "translate_time": round(self.translate_time, 4),
+            "search_time": round(self.search_time, 4),
             "stream_time": round(self.stream_time, 4),
             "total_time": round(self.total_time, 4),
             "compile_time": round(self.compile_time, 4),
