@@ -25,14 +25,6 @@ import tempfile
 from pathlib import Path
 
 
-def seeds(text: str) -> list[int]:
-    out: list[int] = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b or a) + 1))
-    return out
-
-
 def one(path: str, seed: int, variant: str, budget: float, max_cycles: int) -> dict:
     """One episode in this process: its outcome, counts and the largest compiled problem."""
     import resource
@@ -59,7 +51,12 @@ def one(path: str, seed: int, variant: str, budget: float, max_cycles: int) -> d
         episode.close()
     out = result.as_dict()
     big = max(sizes, key=lambda z: (z[1], z[0]), default=(0, 0, 0, None))
-    out["largest"] = {"objects": big[0], "facts": big[1], "values": big[2]}
+    out["largest"] = {
+        "objects": big[0],
+        "facts": big[1],
+        "values": big[2],
+        "ground_actions": max((z[3] or 0 for z in sizes), default=0),
+    }
     peak = max(
         resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
         resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,
@@ -68,16 +65,137 @@ def one(path: str, seed: int, variant: str, budget: float, max_cycles: int) -> d
     return out
 
 
+def run_episode(path: Path, seed: int, args) -> dict:
+    """One episode in a fresh process (``--one``): its record, or a failure with the reason."""
+    cmd = [sys.executable, __file__, "--one", str(path), str(seed)]
+    cmd += ["--variant", args.variant, "--budget", str(args.budget)]
+    cmd += ["--max-cycles", str(args.max_cycles)]
+    try:
+        proc = subprocess.run(
+            cmd, capture_output=True, text=True, env=os.environ, timeout=2 * args.budget + 300
+        )
+        run = json.loads(proc.stdout.strip().splitlines()[-1])
+    except subprocess.TimeoutExpired:
+        run = {"success": False, "reason": "the episode's process outlived 2 x budget + 300 s"}
+    except (json.JSONDecodeError, IndexError):
+        run = {"success": False, "reason": f"exit {proc.returncode}: " + proc.stderr.strip()[-300:]}
+    return run
+
+
+def mean(values: list[float]) -> float:
+    return sum(values) / len(values) if values else float("nan")
+
+
+def summarize(records: list[dict]) -> list[dict]:
+    """Per (N, K): successes, mean planning time of the successes, mean cycles and planner
+    calls, the largest optimistic problem and the peak memory of any episode."""
+    cells: dict[tuple[int, int], list[dict]] = {}
+    for r in records:
+        cells.setdefault((r["objects"], r["hiders"]), []).append(r)
+    rows = []
+    for (n, k), runs in sorted(cells.items()):
+        ok = [r for r in runs if r.get("success")]
+        done = [r for r in runs if "cycles" in r]
+        big = max((r["largest"] for r in done), key=lambda z: z["facts"], default=None)
+        rows.append(
+            {
+                "N": n,
+                "K": k,
+                "episodes": len(runs),
+                "successes": len(ok),
+                "planning_s": mean([r["planning_time"] for r in ok]),
+                "cycles": mean([r["cycles"] for r in done]),
+                "planner_calls": mean([r["planner_calls"] for r in done]),
+                "objects": big["objects"] if big else None,
+                "ground_actions": big.get("ground_actions") if big else None,
+                "facts": big["facts"] if big else None,
+                "peak_mib": max((r["peak_mib"] for r in done), default=None),
+                "failed_seeds": sorted(r["seed"] for r in runs if not r.get("success")),
+            }
+        )
+    return rows
+
+
+def growth(rows: list[dict], k: int, lo: int = 2, hi: int = 8) -> str | None:
+    """The mean planning time of the successes against N (``lo``..``hi``) for ``k`` hiders:
+    the least-squares line and the exponent of a power law (log-log slope; at most 1 is
+    "no faster than linear")."""
+    import numpy as np
+
+    pts = [(r["N"], r["planning_s"]) for r in rows if r["K"] == k and lo <= r["N"] <= hi]
+    pts = [(n, t) for n, t in pts if t == t and t > 0]
+    if len(pts) < 2:
+        return None
+    n, t = np.array(pts, dtype=float).T
+    slope, icept = np.polyfit(n, t, 1)
+    power = np.polyfit(np.log(n), np.log(t), 1)[0]
+    return (
+        f"K={k}, N {int(n.min())}-{int(n.max())}: planning s = {slope:.2f} N {icept:+.2f} "
+        f"(least squares); as a power law N^{power:.2f}"
+    )
+
+
+def plot(rows: list[dict], path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    for k in sorted({r["K"] for r in rows}):
+        mine = [r for r in rows if r["K"] == k]
+        ns = [r["N"] for r in mine]
+        a.plot(ns, [100 * r["successes"] / r["episodes"] for r in mine], "o-", label=f"K={k}")
+        b.plot(ns, [r["planning_s"] for r in mine], "o-", label=f"K={k}")
+    a.set(xlabel="objects N", ylabel="success in the true world (%)", ylim=(0, 105))
+    b.set(xlabel="objects N", ylabel="mean planning time of successes (s)")
+    a.axhline(90, color="grey", lw=0.5, ls="--")
+    for ax in (a, b):
+        ax.legend()
+        ax.grid(alpha=0.3)
+    fig.suptitle("The kitchen with clutter (bench/clutter_bench.py)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def print_rows(rows: list[dict]) -> None:
+    print(
+        f"{'N':>3s} {'K':>3s} {'success':>8s} {'plan s':>8s} {'cycles':>7s} {'planner':>8s} "
+        f"{'largest (objects/actions)':>26s} {'peak MiB':>9s}  failed seeds"
+    )
+    for r in rows:
+        largest = f"{r['objects']}/{r['ground_actions']}" if r["objects"] is not None else "-"
+        peak = r["peak_mib"] if r["peak_mib"] is not None else float("nan")
+        print(
+            f"{r['N']:3d} {r['K']:3d} {r['successes']:>4d}/{r['episodes']:<3d} "
+            f"{r['planning_s']:8.1f} {r['cycles']:7.1f} {r['planner_calls']:8.1f} "
+            f"{largest:>26s} {peak:9.0f}  {','.join(map(str, r['failed_seeds'])) or '-'}"
+        )
+    for k in sorted({r["K"] for r in rows}):
+        line = growth(rows, k)
+        if line:
+            print(line)
+
+
 def main(argv: list[str] | None = None) -> int:
+    from ssr_compile.cli.options import seed_list
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kind", choices=("cook", "inspect"), default="cook")
     ap.add_argument("--objects", type=int, nargs="+", default=[2, 4, 6], metavar="N")
     ap.add_argument("--hiders", type=int, nargs="+", default=[1, 2], metavar="K")
-    ap.add_argument("--seeds", type=seeds, default=[0], help="e.g. 0-9 or 0,3,5")
+    ap.add_argument("--seeds", type=seed_list, default=[0], help="e.g. 0-9 or 0,3,5")
     ap.add_argument("--variant", default="both")
     ap.add_argument("--budget", type=float, default=600.0, help="planning time per episode, s")
     ap.add_argument("--max-cycles", type=int, default=100)
-    ap.add_argument("--jsonl", help="append one JSON line per episode to this file")
+    ap.add_argument("--workers", type=int, default=1, help="episodes at once (one core each)")
+    ap.add_argument(
+        "--jsonl",
+        help="one JSON line per episode, appended as each ends; run again to resume (the "
+        "episodes on file are not run again)",
+    )
+    ap.add_argument("--report", action="store_true", help="only the table of --jsonl's episodes")
+    ap.add_argument("--plot", help="write the curves (success and planning time against N) here")
     ap.add_argument(
         "--full",
         action="store_true",
@@ -93,62 +211,58 @@ def main(argv: list[str] | None = None) -> int:
         args.objects, args.hiders = [2, 4, 6, 8, 10, 12], [1, 2, 4, 6]
         args.seeds, args.budget = list(range(10)), 600.0
 
+    from concurrent.futures import ThreadPoolExecutor
+
     from ssr_compile.sim.task_family import generate
 
-    journal = open(args.jsonl, "a") if args.jsonl else None  # noqa: SIM115
-    rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for n in args.objects:
-            for k in args.hiders:
-                if k >= n:
-                    continue
-                path = Path(tmp) / f"{args.kind}_n{n}_k{k}.toml"
-                path.write_text(generate(args.kind, n, k))
-                runs = []
-                for seed in args.seeds:
-                    cmd = [sys.executable, __file__, "--one", str(path), str(seed)]
-                    cmd += ["--variant", args.variant, "--budget", str(args.budget)]
-                    cmd += ["--max-cycles", str(args.max_cycles)]
-                    proc = subprocess.run(cmd, capture_output=True, text=True, env=os.environ)
-                    try:
-                        run = json.loads(proc.stdout.strip().splitlines()[-1])
-                    except (json.JSONDecodeError, IndexError):
-                        run = {"success": False, "reason": f"exit {proc.returncode}: "
-                               + proc.stderr.strip()[-200:]}  # fmt: skip
-                    run.update(kind=args.kind, objects=n, hiders=k, seed=seed)
-                    print(
-                        f"N={n} K={k} seed {seed}: success {run.get('success')}, "
-                        f"{run.get('cycles', '-')} cycles, planning {run.get('planning_time', '-')} s, "
-                        f"planner calls {run.get('planner_calls', '-')} ({run.get('reason')})",
-                        file=sys.stderr,
-                        flush=True,
-                    )
-                    if journal:
-                        journal.write(json.dumps(run) + "\n")
-                        journal.flush()
-                    runs.append(run)
-                rows.append((n, k, runs))
-    print(
-        f"{'N':>3s} {'K':>3s} {'success':>8s} {'plan s':>8s} {'cycles':>7s} {'planner':>8s} "
-        f"{'largest (facts/objects)':>24s} {'peak MiB':>9s}"
-    )
-    for n, k, runs in rows:
-        ok = [r for r in runs if r.get("success")]
-        done = [r for r in runs if "cycles" in r]
+    records: list[dict] = []
+    if args.jsonl and Path(args.jsonl).is_file():
+        with open(args.jsonl) as f:
+            records = [json.loads(line) for line in f if line.strip()]
+    if not args.report:
+        done = {(r["kind"], r["objects"], r["hiders"], r["seed"]) for r in records}
+        journal = open(args.jsonl, "a") if args.jsonl else None  # noqa: SIM115
+        with tempfile.TemporaryDirectory() as tmp:
+            todo = []
+            for n in args.objects:
+                for k in args.hiders:
+                    if k >= n:
+                        continue
+                    path = Path(tmp) / f"{args.kind}_n{n}_k{k}.toml"
+                    path.write_text(generate(args.kind, n, k))
+                    todo += [
+                        (path, n, k, s) for s in args.seeds if (args.kind, n, k, s) not in done
+                    ]
 
-        def mean(key, among):
-            return sum(r[key] for r in among) / len(among) if among else float("nan")
+            def work(item):
+                path, n, k, seed = item
+                run = run_episode(path, seed, args)
+                run.update(kind=args.kind, objects=n, hiders=k, seed=seed)
+                print(
+                    f"N={n} K={k} seed {seed}: success {run.get('success')}, "
+                    f"{run.get('cycles', '-')} cycles, planning {run.get('planning_time', '-')} s, "
+                    f"planner calls {run.get('planner_calls', '-')} ({run.get('reason')})",
+                    file=sys.stderr,
+                    flush=True,
+                )
+                if journal:
+                    journal.write(json.dumps(run) + "\n")
+                    journal.flush()
+                return run
 
-        big = max((r["largest"] for r in done), key=lambda z: z["facts"], default=None)
-        largest = f"{big['facts']}/{big['objects']}" if big else "-"
-        print(
-            f"{n:3d} {k:3d} {len(ok):>4d}/{len(runs):<3d} {mean('planning_time', ok):8.1f} "
-            f"{mean('cycles', done):7.1f} {mean('planner_calls', done):8.1f} "
-            f"{largest:>24s} "
-            f"{max((r['peak_mib'] for r in done), default=float('nan')):9.0f}"
-        )
-    if journal:
-        journal.close()
+            with ThreadPoolExecutor(max(args.workers, 1)) as pool:
+                records += list(pool.map(work, todo))
+        if journal:
+            journal.close()
+    mine = [r for r in records if r.get("kind", args.kind) == args.kind]
+    if not args.report:
+        wanted = {(n, k, s) for n in args.objects for k in args.hiders for s in args.seeds}
+        mine = [r for r in mine if (r["objects"], r["hiders"], r["seed"]) in wanted]
+    rows = summarize(mine)
+    print_rows(rows)
+    if args.plot and rows:
+        plot(rows, args.plot)
+        print(f"wrote {args.plot}", file=sys.stderr)
     return 0
 
 
