@@ -43,13 +43,13 @@ class StandIns:
             raise StreamFailure(name, e.message) from e
         except Exception as e:
             raise StreamFailure(
-                name, f"its optimistic stand-in raised {type(e).__name__}: {e}"
+                name, f"stream '{name}': its optimistic stand-in raised {type(e).__name__}: {e}"
             ) from e
         if out is not None and len(out) != arity:
             raise StreamFailure(
                 name,
-                f"its optimistic stand-in returned {len(out)} output(s), its declaration has "
-                f"{arity}",
+                f"stream '{name}': its optimistic stand-in returned {len(out)} output(s), its "
+                f"declaration has {arity}",
             )
         return out
 
@@ -58,14 +58,14 @@ class StandIns:
         try:
             return call_test(self.fns[name], args, name)
         except StreamError as e:
-            raise StreamFailure(name, f"its optimistic stand-in: {e.message}") from e
+            raise StreamFailure(name, f"the optimistic stand-in of {e.message}") from e
 
     def cost(self, name: str, args: tuple) -> float:
         """The optimistic value of cost function ``name`` over ``args`` (inf: not applicable)."""
         try:
             value = call_function(self.fns[name], args, name)
         except StreamError as e:
-            raise StreamFailure(name, f"its optimistic stand-in: {e.message}") from e
+            raise StreamFailure(name, f"the optimistic stand-in of {e.message}") from e
         return math.inf if value is None else value
 
 
