@@ -154,7 +154,8 @@ def instantiate(
     values of optimistic objects), takes its outputs' stand-in values from it (none: no
     instance), and outputs with equal stand-in values are one optimistic object
     (``merged``); a test's instance is made only when its stand-in holds; a cost function's
-    term takes its stand-in's value.
+    term takes its stand-in's value.  (An instance sharing its outputs, with ``share``, gets
+    no output stand-ins: its outputs stand for every value.)
 
     ``evaluated`` are real results (their facts join the initial state at level 0);
     ``disabled`` instances are not instantiated optimistically (they failed at this level);
