@@ -61,6 +61,19 @@ class StreamInfo:
     planned with.  For a stream whose instances are few, cheap, and fail often where a plan
     would use them (the kitchen's streams acting from the configuration the robot is in:
     otherwise each failure cost a planner call).
+    ``optimistic``: the stream's optimistic stand-in (pddlstream's ``opt_gen_fn``, and a
+    function's ``FunctionInfo`` ``opt_fn``), a callable taking the same arguments as the
+    stream.  Optimistic instantiation calls it on the values of an instance's inputs -- real
+    values, or the stand-in values of optimistic objects -- instead of assuming the best:
+    for a stream with outputs, it returns the tuple of values that stand in for the outputs
+    (or None: no optimistic output; optimistic outputs with equal stand-in values are one
+    object), so later streams, tests and cost functions see them; for a test, whether the
+    optimistic fact holds (False: not certified, so no plan relies on it); for a cost
+    function, the value planned with (None or infinity: not applicable).  An input without
+    a stand-in value (an output of a stream that has no ``optimistic``) falls back to the
+    defaults.  The real stream is still called on real values only; a stand-in just guides
+    the planner, and should be optimistic (a noise-free belief update, a cost not above the
+    real one) so no solution is pruned.
     """
 
     deferrable: bool = False
@@ -71,6 +84,7 @@ class StreamInfo:
     constant_outputs: bool = False
     redraw_inputs: bool = False
     eager: bool = False
+    optimistic: Callable | None = None
 
     @classmethod
     def of(cls, value: StreamInfo | Mapping[str, Any] | None, name: str) -> StreamInfo:
@@ -139,6 +153,25 @@ class StreamsModule:
                 f"{', '.join(sorted(known)) or 'none'})",
                 file=filename,
             )
+        predicates = {p.name for p in stream_file.predicates}
+        for name, info in self.info.items():
+            if info.optimistic is None:
+                continue
+            if not callable(info.optimistic):
+                raise StreamError(
+                    f"STREAM_INFO['{name}'] in '{self.name}': its optimistic stand-in is "
+                    f"{_brief(info.optimistic)} ({type(info.optimistic).__name__}); expected a "
+                    "callable taking the stream's arguments",
+                    file=filename,
+                )
+            if name in predicates:
+                raise StreamError(
+                    f"STREAM_INFO['{name}'] in '{self.name}' gives an optimistic stand-in to "
+                    f"the :predicate '{name}'; expected one for a stream, a test or a cost "
+                    "function only (a predicate over optimistic values keeps its permissive "
+                    "value and is checked in the stream plan)",
+                    file=filename,
+                )
         self._checked.add(stream_file)
 
 

@@ -21,12 +21,14 @@ import itertools
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 from .. import syntax as S
 from ..errors import InstanceCapReached, UnsupportedError
 from ..formulas import atoms, unify
 from .predicates import optimistic_truth, predicate_tests
 from .result import PassResult
+from .standins import StandIns, value_key
 
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
 # because planners need strictly positive action costs to make progress (paper §III: c_a > 0).
@@ -84,6 +86,10 @@ class Instantiation(PassResult):
     # is not known yet, by its atom (a plan relying on the atom's absence has it checked)
     negated: dict[S.Atom, Result] = field(default_factory=dict)
     unknown: frozenset[str] = frozenset()  # the names of those predicates
+    # optimistic object -> its stand-in value (``standins``: :mod:`.standins`), and the
+    # objects that several instances output (equal stand-in values): object -> those results
+    standins: dict[str, Any] = field(default_factory=dict)
+    merged: dict[str, list[Result]] = field(default_factory=dict)
 
     def optimistic_objects(self) -> set[str]:
         return set(self.objects)
@@ -133,6 +139,7 @@ def instantiate(
     real_function_values: Mapping[S.FuncTerm, float] | None = None,
     exhausted: Iterable[Instance] = (),
     share: bool = False,
+    standins: StandIns | None = None,
 ) -> Instantiation:
     """Optimistically instantiate ``streams`` over ``problem`` up to ``level``.
 
@@ -141,6 +148,14 @@ def instantiate(
     the optimistic problem grows with the real objects, not with chains of optimistic ones;
     instances over real inputs keep their own outputs.  ``shared`` lists the producers of each
     shared object (the solver evaluates consumers for every real value bound to it).
+
+    ``standins``: the streams' optimistic stand-ins (:class:`~.standins.StandIns`).  An
+    instance of a stream that has one, all of whose inputs have values (real, or stand-in
+    values of optimistic objects), takes its outputs' stand-in values from it (none: no
+    instance), and outputs with equal stand-in values are one optimistic object
+    (``merged``); a test's instance is made only when its stand-in holds; a cost function's
+    term takes its stand-in's value.  (An instance sharing its outputs, with ``share``, gets
+    no output stand-ins: its outputs stand for every value.)
 
     ``evaluated`` are real results (their facts join the initial state at level 0);
     ``disabled`` instances are not instantiated optimistically (they failed at this level);
@@ -188,6 +203,8 @@ def instantiate(
     counter = itertools.count(1)
     seen: set[Instance] = set()
     shared_names: dict[tuple[str, str], str] = {}
+    by_standin: dict[Any, str] = {}  # a stand-in value's key -> its optimistic object
+    standin_of = _standin_values(standins, out)
     for res in evaluated:
         out.results.append(res)
 
@@ -227,8 +244,21 @@ def instantiate(
             outputs = []
             full = dict(binding)
             sharing = share and any(x in out.objects for x in inst.inputs)
-            for o in stream.outputs:
+            stand = None
+            if standins is not None and stream.name in standins:
+                args = standin_of(inst.inputs)
+                if args is not None and inst.kind == "test":
+                    if not standins.test(stream.name, args):
+                        continue
+                elif args is not None and not sharing:
+                    stand = standins.outputs(stream.name, args, len(stream.outputs))
+                    if stand is None:
+                        continue
+            for i, o in enumerate(stream.outputs):
                 name = shared_names.get((stream.name, o.name)) if sharing else None
+                key = None if stand is None else value_key(stand[i])
+                if key is not None and key in by_standin:
+                    name = by_standin[key]
                 if name is None:
                     name = optimistic_name(o.name, next(counter))
                     while name in taken:
@@ -237,6 +267,10 @@ def instantiate(
                     new_objects.append(S.Typed(name, o.type))
                     if sharing:
                         shared_names[(stream.name, o.name)] = name
+                    if stand is not None:
+                        out.standins[name] = stand[i]
+                        if key is not None:
+                            by_standin[key] = name
                 full[o.name] = name
                 outputs.append(name)
             certified = tuple(
@@ -245,6 +279,8 @@ def instantiate(
             res = Result(inst, tuple(outputs), certified, tuple(dom_facts), inst_level)
             out.results.append(res)
             for name in outputs:
+                if name in out.objects and stand is not None and out.objects[name] is not res:
+                    out.merged.setdefault(name, [out.objects[name]]).append(res)
                 out.objects.setdefault(name, res)
                 if sharing:
                     out.shared.setdefault(name, []).append(res)
@@ -276,6 +312,8 @@ def instantiate(
             term = S.FuncTerm(fn.name, tuple(S.Const(a) for a in args))
             if term in real_function_values:
                 value, optimistic = real_function_values[term], False
+            elif standins is not None and fn.name in standins and standin_of(args) is not None:
+                value, optimistic = standins.cost(fn.name, standin_of(args)), True
             else:
                 value, optimistic = function_values.get(fn.name, DEFAULT_FUNCTION_VALUE), True
             lvl = max((levels[f] for f in dom_facts), default=0)
@@ -299,6 +337,24 @@ def instantiate(
     objects = problem.objects + tuple(real_objects) + tuple(new_objects)
     out.problem = replace(problem, objects=objects, init=tuple(init))
     return out
+
+
+def _standin_values(standins: StandIns | None, out: Instantiation):
+    """A function giving the values of some objects for the stand-ins: real objects' values,
+    optimistic objects' stand-in values; None when one has none."""
+
+    def values(names: tuple[str, ...]) -> tuple | None:
+        found = []
+        for n in names:
+            if n in out.objects:
+                if n not in out.standins:
+                    return None
+                found.append(out.standins[n])
+            else:
+                found.append(standins.value(n))
+        return tuple(found)
+
+    return values
 
 
 def _negated_predicates(streams, truth, index, levels, disabled, out: Instantiation) -> None:

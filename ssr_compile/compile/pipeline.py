@@ -43,6 +43,7 @@ from .instantiate import (  # noqa: F401  (declare_stream_predicates: re-exporte
 from .leaves import share_leaves
 from .lower import Lowered, lower
 from .result import PassResult, Plan, map_back
+from .standins import StandIns
 
 # Share the optimistic leaf outputs of streams (pass 4); measurement scripts turn it off to
 # compare (bench/solve_bench.py --no-shared-leaves).
@@ -132,6 +133,7 @@ def compile_problem(
     unit_cost: bool = False,
     share: bool = False,
     leaves: bool | None = None,
+    standins: StandIns | None = None,
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
     passes: list[PassResult] = [objects_as_constants(domain, problem)]
@@ -148,6 +150,7 @@ def compile_problem(
             function_values=function_values,
             real_function_values=real_function_values,
             share=share,
+            standins=standins,
         )
         passes.append(inst)
     source = passes[-1]

@@ -10,6 +10,7 @@ from .. import syntax as S
 from ..compile.instantiate import Instantiation, Result
 from ..compile.pipeline import compile_problem
 from ..compile.predicates import optimistic_truth
+from ..compile.standins import StandIns
 from ..errors import InstanceCapReached
 from ..planners import fd as _default_backend  # noqa: F401 - the default, loaded with the solver
 from ..planners import get_planner
@@ -58,6 +59,7 @@ class SolverLoop:
         for r in state.evaluated:  # their facts have complexity 0 in this call
             self.ev.fact_complexity.update((f, 0) for f in r.certified)
         self.say = options.progress or (lambda msg: None)
+        self.standins = StandIns.of(module, self.values.value)
         self.optimistic_values = {
             f.name: module.info_for(f.name).optimistic_value
             for f in streams.functions
@@ -169,6 +171,7 @@ class SolverLoop:
             unit_cost=self.options.unit_cost,
             share=self.options.share,
             leaves=self.options.leaves,
+            standins=self.standins,
         )
         self.last_compile = time.perf_counter() - started
         self.stats.compile_time += self.last_compile

@@ -309,10 +309,13 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
 
     Needed: results certifying a static fact of the preimage, results making an optimistic
     object that appears in the plan, and optimistic cost-function terms; then, recursively,
-    the producers of the optimistic objects and facts in their inputs and domains.
+    the producers of the optimistic objects and facts in their inputs and domains.  An object
+    that several instances output (equal stand-in values: ``inst.merged``) is made by the
+    instance whose facts the plan uses, where it uses one.
     """
     needed: list[Result] = []
     seen: set[int] = set()
+    planned = _plan_producers(inst, pre)
 
     shared = inst.shared
     waiting: list[Result] = []  # results with a shared input, placed after its producers
@@ -331,10 +334,10 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
             return
         for obj in res.instance.inputs:
             if obj in inst.objects:
-                need(inst.objects[obj])
+                need(planned.get(obj) or inst.objects[obj])
         for fact in res.domain:
-            for producer in inst.facts.get(fact, ())[:1]:
-                need(producer)
+            for made in _first_producer(inst, fact, planned):
+                need(made)
         needed.append(res)
 
     for fact in sorted(pre.static_facts, key=lambda a: (a.pred, str(a))):
@@ -343,7 +346,7 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
     for _, args in plan:
         for v in args:
             if v in inst.objects:
-                need(inst.objects[v])
+                need(planned.get(v) or inst.objects[v])
     for atom in sorted(pre.negated, key=str):  # the absences the plan relies on, checked
         res = inst.negated.get(atom)
         if res is not None:
@@ -361,6 +364,32 @@ def stream_plan(inst: Instantiation, pre: Preimage, plan: Plan) -> list[Result]:
                 need(producers[0])
         needed.append(res)
     return needed
+
+
+def _plan_producers(inst: Instantiation, pre: Preimage) -> dict[str, Result]:
+    """Each merged object's producer whose certified facts the plan uses (its static facts'
+    first producers, in their order)."""
+    if not inst.merged:
+        return {}
+    out: dict[str, Result] = {}
+    for fact in sorted(pre.static_facts, key=lambda a: (a.pred, str(a))):
+        for res in inst.facts.get(fact, ())[:1]:
+            for o in res.outputs:
+                if o in inst.merged:
+                    out.setdefault(o, res)
+    return out
+
+
+def _first_producer(inst: Instantiation, fact: S.Atom, producer: dict[str, Result]) -> list:
+    """The producer a domain fact is taken from: the first that certifies it, or, for a
+    fact over a merged object, the object's producer in the plan when that certifies it."""
+    made = inst.facts.get(fact, ())
+    if len(made) > 1 and producer:
+        for t in fact.args:
+            chosen = producer.get(t.name)
+            if chosen is not None and any(r is chosen for r in made):
+                return [chosen]
+    return list(made[:1])
 
 
 def results_by_object(results: Iterable[Result]) -> dict[str, Result]:
