@@ -27,7 +27,18 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from .geometry import Pose, invert, multiply, pose, quat_from_yaw, yaw_of
+from .geometry import (
+    IDENTITY_QUAT,
+    Pose,
+    invert,
+    multiply,
+    pose,
+    quat_from_yaw,
+    quat_mul,
+    quat_to_matrix,
+    rotate,
+    yaw_of,
+)
 from .robot import ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, FINGER_OPEN, Robot
 
 COUNTER_TOP = 0.70
@@ -177,6 +188,7 @@ class World:
             self.colors[name] = tuple(rgba)
         self.body_names = {b: n for n, b in self.objects.items()}
         self.robot = Robot(c)
+        self._arm_links: list[int] | None = None  # the links _arm_over_base checks
         self.surfaces = self._surfaces()
         # State
         self.support: dict[str, tuple[str, Pose] | None] = {n: None for n in self.objects}
@@ -569,12 +581,19 @@ class World:
     def _arm_over_base(self, inflate: float = 0.08) -> bool:
         r = self.robot
         base = self.link_pose(r.body, r.base_link)
-        inv = invert(base)
+        inv_pos, inv_quat = invert(base)
         hx, hy, hz = BASE_HALF_EXTENTS
         top = BASE_CLEARANCE + 2 * hz
-        for link in list(r.arm_joints[3:]) + sorted(r.hand_links):
-            st = p.getLinkState(r.body, link, physicsClientId=self.client)
-            x, y, z = multiply(inv, pose(st[4]))[0]
+        # Each link's origin in the base's frame: ``multiply(inv, pose(origin))``, with the
+        # parts that do not depend on the link computed once (the same arithmetic, the same
+        # floats) and the link states read in one call.
+        origin = np.zeros(3) + rotate(IDENTITY_QUAT, inv_pos)
+        rot = quat_to_matrix(quat_mul(IDENTITY_QUAT, inv_quat))
+        links = self._arm_links
+        if links is None:
+            links = self._arm_links = list(r.arm_joints[3:]) + sorted(r.hand_links)
+        for st in p.getLinkStates(r.body, links, physicsClientId=self.client):
+            x, y, z = origin + rot @ np.asarray(pose(st[4])[0], dtype=float)
             if abs(x) < hx + inflate and abs(y) < hy + inflate and z < top + inflate:
                 return True
         return False
