@@ -313,14 +313,20 @@ class Robot:
                     res = self._ik_attempts[key]
                 else:
                     res = self._ik_attempt(target, seeds[k], pos_tol, ori_tol)
-                    if len(self._ik_attempts) >= IK_ATTEMPTS_KEPT:
-                        del self._ik_attempts[next(iter(self._ik_attempts))]
-                    self._ik_attempts[key] = res
+                    self._keep(key, res)
             else:
                 res = self._ik_attempt(target, self.sample_arm(rng), pos_tol, ori_tol)
             if res is not None:
                 return res
         return None
+
+    def _keep(self, key: bytes, res: IKResult | None) -> None:
+        """Keep an attempt's answer, dropping the oldest beyond :data:`IK_ATTEMPTS_KEPT`."""
+        kept = self._ik_attempts
+        while kept and len(kept) >= IK_ATTEMPTS_KEPT:
+            del kept[next(iter(kept))]
+        if IK_ATTEMPTS_KEPT > 0:
+            kept[key] = res
 
     def _ik_attempt(
         self, target: Pose, seed: Sequence[float], pos_tol: float, ori_tol: float
