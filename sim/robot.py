@@ -210,7 +210,7 @@ class Robot:
         if len(values) != len(joints):
             raise ValueError(f"{len(joints)} joint values expected, got {len(values)}")
         p.resetJointStatesMultiDof(
-            body, joints, [[float(v)] for v in values], physicsClientId=client
+            body, joints, [[v] for v in map(float, values)], physicsClientId=client
         )
 
     def get_base(self) -> tuple[float, float, float]:
@@ -247,9 +247,17 @@ class Robot:
     def _refine(
         self, conf: np.ndarray, target: Pose, pos_tol: float, ori_tol: float, iters: int = 60
     ) -> tuple[np.ndarray, float, float]:
-        """Damped least-squares refinement with the Jacobian, clamped to the joint limits."""
+        """Damped least-squares refinement with the Jacobian, clamped to the joint limits.
+
+        Each step is a function of the configuration alone: when a configuration comes back
+        (bit for bit, the clamp at a joint limit often brings that about), the iterates go
+        round that cycle until the last one, which is then read off the cycle."""
         zeros = [0.0] * 9
-        for _ in range(iters):
+        fingers = [FINGER_OPEN, FINGER_OPEN]
+        lower, upper = self.arm_lower, self.arm_upper
+        seen: dict[bytes, int] = {}  # configuration -> the iteration it starts
+        visited: list[np.ndarray] = []
+        for i in range(iters):
             reached = self._ik_fk(conf)
             e_pos = np.subtract(target[0], reached[0])
             dq = quat_mul(target[1], quat_inv(reached[1]))
@@ -261,14 +269,19 @@ class Robot:
             if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
                 break
             lin, ang = p.calculateJacobian(
-                self.ik_body, self.ik_tool, [0.0, 0.0, 0.0],
-                list(conf) + [FINGER_OPEN, FINGER_OPEN], zeros, zeros,
-                physicsClientId=self.ik_client,
+                self.ik_body, self.ik_tool, [0.0, 0.0, 0.0], conf.tolist() + fingers,
+                zeros, zeros, physicsClientId=self.ik_client,
             )  # fmt: skip
-            jac = np.vstack([np.asarray(lin)[:, :7], np.asarray(ang)[:, :7]])
+            jac = np.ascontiguousarray(np.array(lin + ang)[:, :7])
             err = np.concatenate([e_pos, e_rot])
             step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING, err)
-            conf = np.clip(conf + step, self.arm_lower, self.arm_upper)
+            seen[conf.tobytes()] = i
+            visited.append(conf)
+            conf = np.minimum(np.maximum(conf + step, lower), upper)  # np.clip's values
+            first = seen.get(conf.tobytes())
+            if first is not None:  # a cycle: configuration i + 1 is configuration ``first``
+                conf = visited[first + (iters - first) % (i + 1 - first)]
+                break
         reached = self._ik_fk(conf)
         pos_err = norm(np.subtract(reached[0], target[0]))
         return conf, pos_err, angle_between(reached[1], target[1])

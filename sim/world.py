@@ -593,7 +593,7 @@ class World:
         if links is None:
             links = self._arm_links = list(r.arm_joints[3:]) + sorted(r.hand_links)
         for st in p.getLinkStates(r.body, links, physicsClientId=self.client):
-            x, y, z = origin + rot @ np.asarray(pose(st[4])[0], dtype=float)
+            x, y, z = origin + rot @ np.array(st[4], dtype=float)
             if abs(x) < hx + inflate and abs(y) < hy + inflate and z < top + inflate:
                 return True
         return False

@@ -12,7 +12,7 @@ import numpy as np
 import pybullet as p
 import pytest
 from ssr_compile.sim import robot as robot_mod
-from ssr_compile.sim.geometry import invert, multiply, norm, pose
+from ssr_compile.sim.geometry import angle_between, invert, multiply, norm, pose, quat_inv, quat_mul
 from ssr_compile.sim.robot import ARM_REST, ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, Robot
 from ssr_compile.sim.world import World
 
@@ -178,3 +178,47 @@ def test_kept_ik_attempts_are_bounded(robots, monkeypatch):
     assert r.ik_attempts_reused == 0
     r.inverse_kinematics((0.0, 0.0, 0.0), tools[-1], rng, restarts=1)
     assert r.ik_attempts_reused == 1
+
+
+def _refine_before(r: Robot, conf, target, pos_tol, ori_tol, iters=60):
+    """The refinement as it was, with the configurations it went through."""
+    zeros = [0.0] * 9
+    went = [conf]
+    for _ in range(iters):
+        reached = r._ik_fk(conf)
+        e_pos = np.subtract(target[0], reached[0])
+        dq = quat_mul(target[1], quat_inv(reached[1]))
+        if dq[3] < 0:
+            dq = tuple(-v for v in dq)
+        s = np.linalg.norm(dq[:3])
+        e_rot = np.zeros(3) if s < 1e-12 else np.asarray(dq[:3]) / s * 2 * np.arctan2(s, dq[3])
+        pos_err, ori_err = float(np.linalg.norm(e_pos)), float(np.linalg.norm(e_rot))
+        if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
+            break
+        lin, ang = p.calculateJacobian(
+            r.ik_body, r.ik_tool, [0.0, 0.0, 0.0], list(conf) + [0.04, 0.04], zeros, zeros,
+            physicsClientId=r.ik_client,
+        )  # fmt: skip
+        jac = np.vstack([np.asarray(lin)[:, :7], np.asarray(ang)[:, :7]])
+        err = np.concatenate([e_pos, e_rot])
+        step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), err)
+        conf = np.clip(conf + step, r.arm_lower, r.arm_upper)
+        went.append(conf)
+    reached = r._ik_fk(conf)
+    pos_err = float(np.linalg.norm(np.subtract(reached[0], target[0])))
+    return (conf, pos_err, angle_between(reached[1], target[1])), went
+
+
+def test_refinement_answers_as_before_cycles_included(robots):
+    r, _ = robots
+    rng = np.random.default_rng(10)
+    cycled = solved = 0
+    for _ in range(150):
+        target = pose(rng.uniform((-0.2, -0.8, 0.0), (1.0, 0.8, 1.2)), rng.normal(size=4))
+        start = np.asarray(r.sample_arm(rng))
+        want, went = _refine_before(r, start, target, 2e-3, 2e-2)
+        got = r._refine(start, target, 2e-3, 2e-2)
+        assert got[0].tobytes() == want[0].tobytes() and got[1:] == want[1:]
+        cycled += len({q.tobytes() for q in went}) < len(went)
+        solved += want[1] < 2e-3 and want[2] < 2e-2
+    assert cycled > 0 and solved > 0  # both cases were compared
