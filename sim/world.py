@@ -60,6 +60,7 @@ BUTTON_CENTER = (CABINET_FRONT - 0.01, -0.7, 0.55)
 SURFACE_MARGIN = 0.005
 PLACE_GAP = 1e-3  # objects rest this far above their support (no spurious contacts)
 COLLISION_TOL = 1e-4
+COLLISIONS_KEPT = 100_000  # robot_collision's answers kept per world
 
 #: The kinds of objects the world can build: half extents (x, y, z) and colour.  The sugar box
 #: is taller than the top drawer's clearance (0.15) and both boxes are tall enough to hide the
@@ -189,6 +190,10 @@ class World:
         self.body_names = {b: n for n, b in self.objects.items()}
         self.robot = Robot(c)
         self._arm_links: list[int] | None = None  # the links _arm_over_base checks
+        self._bodies: list[int] | None = None  # the client's bodies (see state_key)
+        self._jointed: list[tuple[int, list[int]]] = []  # (body, its joints that move)
+        self._collisions: dict[tuple, bool] = {}  # robot_collision's answers by state_key
+        self.collisions_reused = 0  # for benchmarks and tests
         self.surfaces = self._surfaces()
         # State
         self.support: dict[str, tuple[str, Pose] | None] = {n: None for n in self.objects}
@@ -525,7 +530,46 @@ class World:
         """Robot (and what it holds) in collision with the world at the current state.
 
         ``ignore``: objects not checked at all; ``ignore_hand``: objects the gripper links may
-        touch (the object being grasped at the grasp configuration)."""
+        touch (the object being grasped at the grasp configuration).
+
+        Answers are kept by :meth:`state_key` (streams check the same configurations in the
+        same scene again and again: a cartesian path solved again from the same base)."""
+        key = (self.state_key(), tuple(sorted(set(ignore))), tuple(sorted(set(ignore_hand))))
+        found = self._collisions.get(key)
+        if found is not None:
+            self.collisions_reused += 1
+            return found
+        out = self._robot_collision(ignore, ignore_hand)
+        kept = self._collisions
+        while kept and len(kept) >= COLLISIONS_KEPT:
+            del kept[next(iter(kept))]
+        if COLLISIONS_KEPT > 0:
+            kept[key] = out
+        return out
+
+    def state_key(self) -> tuple:
+        """What a collision query of this client reads, as pybullet has it (whoever set it):
+        every body's base pose and the positions of its joints that move; and which objects
+        are present and held."""
+        c = self.client
+        if self._bodies is None or len(self._bodies) != p.getNumBodies(physicsClientId=c):
+            self._bodies = [p.getBodyUniqueId(i, physicsClientId=c)
+                            for i in range(p.getNumBodies(physicsClientId=c))]  # fmt: skip
+            self._jointed = []
+            for body in self._bodies:
+                moving = [j for j in range(p.getNumJoints(body, physicsClientId=c))
+                          if p.getJointInfo(body, j, physicsClientId=c)[2] != p.JOINT_FIXED]  # fmt: skip
+                if moving:
+                    self._jointed.append((body, moving))
+        where = p.getBasePositionAndOrientation
+        key: list = [where(b, physicsClientId=c) for b in self._bodies]
+        for body, joints in self._jointed:
+            key.append(tuple([s[0] for s in p.getJointStates(body, joints, physicsClientId=c)]))
+        key.append(None if self.held is None else self.held.obj)
+        key.append(tuple([n for n in self.objects if self.support[n] is not None]))
+        return tuple(key)
+
+    def _robot_collision(self, ignore: Iterable[str], ignore_hand: Iterable[str]) -> bool:
         r = self.robot
         hand_ok = {self.objects[n] for n in ignore_hand}
         for body in self.obstacles(ignore):

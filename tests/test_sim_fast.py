@@ -12,6 +12,7 @@ import numpy as np
 import pybullet as p
 import pytest
 from ssr_compile.sim import robot as robot_mod
+from ssr_compile.sim import world as world_mod
 from ssr_compile.sim.geometry import angle_between, invert, multiply, norm, pose, quat_inv, quat_mul
 from ssr_compile.sim.robot import ARM_REST, ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, Robot
 from ssr_compile.sim.world import World
@@ -222,3 +223,95 @@ def test_refinement_answers_as_before_cycles_included(robots):
         cycled += len({q.tobytes() for q in went}) < len(went)
         solved += want[1] < 2e-3 and want[2] < 2e-2
     assert cycled > 0 and solved > 0  # both cases were compared
+
+
+@pytest.fixture
+def kitchen(world):
+    with world.saved():
+        world.held = None
+        for d in ("top_drawer", "bottom_drawer"):
+            world.set_drawer(d, 0.0)
+        world.set_object("block", "counter", 1.0, 0.8, 0.0)
+        world.set_object("sugar_box", "counter", 1.15, 1.05, 0.0)
+        world.set_object("cracker_box", "counter", 1.15, 0.55, 0.0)
+        world.set_base((0.45, 0.0, 0.0))
+        world.set_arm(ARM_TUCK)
+        yield world
+
+
+def _fresh(w: World, **kw) -> bool:
+    return w._robot_collision(kw.get("ignore", ()), kw.get("ignore_hand", ()))
+
+
+def test_kept_collision_answers_follow_every_change_of_the_scene(kitchen):
+    w = kitchen
+    assert not w.robot_collision()
+    # A drawer opened into the robot's base.
+    w.set_drawer("bottom_drawer", 0.38)
+    assert w.robot_collision() and _fresh(w)
+    w.set_drawer("bottom_drawer", 0.0)
+    reused = w.collisions_reused
+    assert not w.robot_collision()
+    assert w.collisions_reused == reused + 1  # the same scene as the first check: kept
+    # An object put where the hand is: by the world, and behind its back (pybullet directly).
+    hand = p.getLinkState(w.robot.body, w.robot.links["panda_hand"], physicsClientId=w.client)[4]
+    w.place_object("block", "counter", ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
+    p.resetBasePositionAndOrientation(
+        w.objects["block"], hand, (0, 0, 0, 1), physicsClientId=w.client
+    )
+    assert w.robot_collision() and _fresh(w)
+    assert not w.robot_collision(ignore=("block",))  # what is ignored is part of the question
+    w.set_object("block", "counter", 1.0, 0.8, 0.0)
+    assert not w.robot_collision()
+    # The arm moved into the counter, one joint at a time, also behind the world's back.
+    p.resetJointState(w.robot.body, w.robot.arm_joints[1], 1.2, physicsClientId=w.client)
+    assert w.robot_collision() == _fresh(w)
+    w.set_arm(ARM_TUCK)
+    # Holding the block inside the base: the held object is checked.
+    w.grab("block", pose((0.0, 0.0, 0.0)))
+    assert w.robot_collision() == _fresh(w)
+    held = w.robot_collision()
+    w.held = None
+    w.set_object("block", "counter", 1.0, 0.8, 0.0)
+    assert w.robot_collision() == _fresh(w) != held
+
+
+def test_kept_collision_answers_equal_fresh_ones_on_a_random_walk(kitchen):
+    w = kitchen
+    rng = np.random.default_rng(11)
+    states = []
+    for _ in range(60):
+        base = (*rng.uniform((0.0, -0.6), (0.6, 0.9)), float(rng.uniform(-0.5, 0.5)))
+        states.append((base, w.robot.sample_arm(rng), float(rng.uniform(0.0, 0.38)),
+                       float(rng.uniform(0.85, 1.25)), ("block",) if rng.random() < 0.3 else ()))  # fmt: skip
+    answers = []
+    reused = w.collisions_reused
+    for k in list(range(60)) + list(rng.permutation(60)):  # each state twice, out of order
+        base, arm, q, x, hand = states[k]
+        w.set_drawer("top_drawer", q)
+        w.set_object("block", "counter", x, 0.8, 0.0)
+        w.set_base(base)
+        w.set_arm(arm)
+        answers.append(w.robot_collision(ignore_hand=hand))
+        assert answers[-1] == _fresh(w, ignore_hand=hand)
+    assert w.collisions_reused - reused >= 60
+    assert 0 < sum(answers) < len(answers)
+
+
+def test_kept_collision_answers_are_bounded(kitchen, monkeypatch):
+    w = kitchen
+    monkeypatch.setattr(world_mod, "COLLISIONS_KEPT", 2, raising=True)
+    w._collisions.clear()
+    for x in (0.1, 0.2, 0.3):
+        w.set_base((x, 0.0, 0.0))
+        w.robot_collision()
+    assert len(w._collisions) == 2
+    w.set_base((0.1, 0.0, 0.0))  # the oldest, dropped: checked again
+    reused = w.collisions_reused
+    w.robot_collision()
+    assert w.collisions_reused == reused and len(w._collisions) == 2
+    monkeypatch.setattr(world_mod, "COLLISIONS_KEPT", 0, raising=True)
+    w.set_base((0.4, 0.0, 0.0))
+    w.robot_collision()
+    w.robot_collision()
+    assert w.collisions_reused == reused and not w._collisions
