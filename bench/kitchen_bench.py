@@ -15,6 +15,9 @@ and the rest (preimages, stream plans, the solver's own work).
     python bench/kitchen_bench.py --full               # 4 tasks x 4 variants x seeds 0-9, 600 s
     python bench/kitchen_bench.py --tasks inspect stow swap cook --variants neither \\
         constraints deferred both --seeds 0-9 --budget 600
+
+``--streams`` also prints, per task, each stream's calls and seconds (the solver's
+``Statistics.streams`` summed over every attempt) and its share of the stream time.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from dataclasses import replace
 
 from ssr_compile.streams.environments.kitchen import make_episode
 
+import ssr_compile.policy as policy
 from ssr_compile.catalog import TASKS, VARIANTS
 from ssr_compile.episode_record import SPLIT
 from ssr_compile.policy import PolicySettings, run_policy
@@ -68,6 +72,39 @@ def print_split(rows: dict) -> None:
               f"{plan / cycles:8.3f}  " + "  ".join(f"{c:>18s}" for c in cells))  # fmt: skip
 
 
+class StreamTimes:
+    """Per stream name: [calls, seconds] summed over every solve of the policy, by task (wraps
+    ``ssr_compile.policy.solve`` while in use)."""
+
+    def __init__(self) -> None:
+        self.by_task: dict[str, dict[str, list]] = {}
+        self.task = ""
+        self._solve = policy.solve
+
+    def __enter__(self) -> StreamTimes:
+        def counted(*args, **kwargs):
+            sol = self._solve(*args, **kwargs)
+            sums = self.by_task.setdefault(self.task, {})
+            for name, st in sol.stats.streams.items():
+                row = sums.setdefault(name, [0, 0.0])
+                row[0] += st.calls
+                row[1] += st.time
+            return sol
+
+        policy.solve = counted
+        return self
+
+    def __exit__(self, *exc) -> None:
+        policy.solve = self._solve
+
+    def print(self) -> None:
+        for task, sums in self.by_task.items():
+            total = sum(t for _, t in sums.values()) or 1.0
+            print(f"\nstreams of {task} (all episodes): calls, seconds, share of the stream time")
+            for name, (calls, t) in sorted(sums.items(), key=lambda kv: -kv[1][1]):
+                print(f"  {name:24s} {calls:6d} {t:9.2f} s {100 * t / total:5.1f} %")
+
+
 def seeds(text: str) -> list[int]:
     out: list[int] = []
     for part in text.split(","):
@@ -95,8 +132,18 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--jsonl", help="append one JSON line per episode to this file")
     ap.add_argument("-v", "--verbose", action="store_true", help="print every cycle")
+    ap.add_argument("--streams", action="store_true", help="print each stream's calls, seconds")
     args = ap.parse_args(argv)
+    times = StreamTimes()
+    if args.streams:
+        with times:
+            code = run(args, times)
+        times.print()
+        return code
+    return run(args)
 
+
+def run(args, times: StreamTimes | None = None) -> int:
     rows: dict[tuple[str, str], list[dict]] = {}
     if args.full:
         args.tasks, args.variants = list(TASKS), list(VARIANTS)
@@ -109,11 +156,13 @@ def main(argv: list[str] | None = None) -> int:
         max_cycles=args.max_cycles,
     )
     for task in args.tasks:
+        if times is not None:
+            times.task = task
         for variant in args.variants:
             settings = replace(shared, variant=variant)
             for seed in args.seeds:
                 ep = make_episode(task, seed)
-                start = time.monotonic()
+                start, cpu = time.monotonic(), time.process_time()
                 try:
                     res = run_policy(
                         ep,
@@ -126,13 +175,14 @@ def main(argv: list[str] | None = None) -> int:
                 d["reason"] = res.reason
                 d["actions_executed"] = res.actions
                 d["wall"] = round(time.monotonic() - start, 2)
+                d["cpu"] = round(time.process_time() - cpu, 2)  # this process (not the planner's)
                 d["split"] = split(res)
                 rows.setdefault((task, variant), []).append(d)
                 print(
                     f"{task:8s} {variant:11s} seed {seed:2d}  "
                     f"{'SUCCESS' if d['success'] else 'failure'}  cycles {d['cycles']:3d}  "
                     f"planning {d['planning_time']:7.1f} s  held {d['constrained_held']:2d}  "
-                    f"fallbacks {d['fallbacks']:2d}  ({res.reason})",
+                    f"fallbacks {d['fallbacks']:2d}  cpu {d['cpu']:6.1f} s  ({res.reason})",
                     flush=True,
                 )
                 if out:

@@ -6,6 +6,7 @@ without a client.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -17,11 +18,21 @@ Pose = tuple[Vec3, Quat]
 IDENTITY_QUAT: Quat = (0.0, 0.0, 0.0, 1.0)
 
 
+def norm(v) -> float:
+    """Euclidean norm of a vector: the arithmetic of ``np.linalg.norm`` (``sqrt(v.dot(v))``,
+    so the same float), without its argument handling (it is called a million times an
+    episode)."""
+    a = np.asarray(v, dtype=float)
+    return math.sqrt(a.dot(a))
+
+
 def pose(pos: Sequence[float], quat: Sequence[float] = IDENTITY_QUAT) -> Pose:
     """Normalise to a tuple-of-floats pose (hashable, comparable)."""
+    if quat is IDENTITY_QUAT:  # the default: already a unit quaternion of floats
+        return (tuple(map(float, pos)), IDENTITY_QUAT)  # type: ignore[return-value]
     q = np.asarray(quat, dtype=float)
-    q = q / np.linalg.norm(q)
-    return (tuple(float(v) for v in pos), tuple(float(v) for v in q))  # type: ignore[return-value]
+    q = q / math.sqrt(q.dot(q))
+    return (tuple(map(float, pos)), tuple(q.tolist()))  # type: ignore[return-value]
 
 
 def quat_mul(a: Sequence[float], b: Sequence[float]) -> Quat:

@@ -20,7 +20,17 @@ import numpy as np
 import pybullet as p
 import pybullet_data
 
-from .geometry import Pose, angle_between, invert, multiply, pose, pose2d, quat_inv, quat_mul
+from .geometry import (
+    Pose,
+    angle_between,
+    invert,
+    multiply,
+    norm,
+    pose,
+    pose2d,
+    quat_inv,
+    quat_mul,
+)
 
 PANDA_URDF = os.path.join(pybullet_data.getDataPath(), "franka_panda", "panda.urdf")
 
@@ -51,6 +61,9 @@ BASE_JOINTS = ("base_x", "base_y", "base_theta")
 TOOL_LINK = "panda_grasptarget"
 HAND_LINKS = ("panda_link8", "panda_hand", "panda_leftfinger", "panda_rightfinger", TOOL_LINK)
 FINGER_OPEN = 0.04
+#: IK attempts from a given seed kept per robot (see :meth:`Robot.inverse_kinematics`).
+IK_ATTEMPTS_KEPT = 50_000
+_DAMPING = 1e-4 * np.eye(6)  # of the damped least-squares step in Robot._refine
 
 #: A comfortable arm configuration (arm folded up, hand forward and down).
 ARM_REST = (0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.785)
@@ -167,6 +180,9 @@ class Robot:
         self.ik_arm = [ik_joints[n] for n in ARM_JOINTS]
         self.ik_fingers = [ik_joints[n] for n in FINGER_JOINTS]
         self.ik_tool = ik_links[TOOL_LINK]
+        # (target in the arm's frame, seed, tolerances), as bytes -> the IK attempt's answer
+        self._ik_attempts: dict[bytes, IKResult | None] = {}
+        self.ik_attempts_reused = 0  # for benchmarks and tests
         self.set_fingers(FINGER_OPEN)
 
     def close(self) -> None:
@@ -179,16 +195,23 @@ class Robot:
 
     # -- state -------------------------------------------------------------------------------
     def set_base(self, conf: Sequence[float]) -> None:
-        for j, v in zip(self.base_joints, conf, strict=True):
-            p.resetJointState(self.body, j, float(v), physicsClientId=self.client)
+        self._reset(self.body, self.base_joints, conf, self.client)
 
     def set_arm(self, conf: Sequence[float]) -> None:
-        for j, v in zip(self.arm_joints, conf, strict=True):
-            p.resetJointState(self.body, j, float(v), physicsClientId=self.client)
+        self._reset(self.body, self.arm_joints, conf, self.client)
 
     def set_fingers(self, width: float) -> None:
-        for j in self.finger_joints:
-            p.resetJointState(self.body, j, float(width), physicsClientId=self.client)
+        self._reset(self.body, self.finger_joints, [width] * len(self.finger_joints), self.client)
+
+    @staticmethod
+    def _reset(body: int, joints: list[int], values: Sequence[float], client: int) -> None:
+        """Reset ``joints`` to ``values`` in one call (the state ``resetJointState`` joint by
+        joint leaves)."""
+        if len(values) != len(joints):
+            raise ValueError(f"{len(joints)} joint values expected, got {len(values)}")
+        p.resetJointStatesMultiDof(
+            body, joints, [[v] for v in map(float, values)], physicsClientId=client
+        )
 
     def get_base(self) -> tuple[float, float, float]:
         return tuple(
@@ -212,8 +235,7 @@ class Robot:
 
     # -- kinematics (private client) ---------------------------------------------------------
     def _ik_fk(self, conf: Sequence[float]) -> Pose:
-        for j, v in zip(self.ik_arm, conf, strict=True):
-            p.resetJointState(self.ik_body, j, float(v), physicsClientId=self.ik_client)
+        self._reset(self.ik_body, self.ik_arm, conf, self.ik_client)
         st = p.getLinkState(
             self.ik_body,
             self.ik_tool,
@@ -225,30 +247,43 @@ class Robot:
     def _refine(
         self, conf: np.ndarray, target: Pose, pos_tol: float, ori_tol: float, iters: int = 60
     ) -> tuple[np.ndarray, float, float]:
-        """Damped least-squares refinement with the Jacobian, clamped to the joint limits."""
+        """Damped least-squares refinement with the Jacobian, clamped to the joint limits.
+
+        Each step is a function of the configuration alone: when a configuration comes back
+        (bit for bit, the clamp at a joint limit often brings that about), the iterates go
+        round that cycle until the last one, which is then read off the cycle."""
         zeros = [0.0] * 9
-        for _ in range(iters):
+        fingers = [FINGER_OPEN, FINGER_OPEN]
+        lower, upper = self.arm_lower, self.arm_upper
+        seen: dict[bytes, int] = {}  # configuration -> the iteration it starts
+        visited: list[np.ndarray] = []
+        for i in range(iters):
             reached = self._ik_fk(conf)
             e_pos = np.subtract(target[0], reached[0])
             dq = quat_mul(target[1], quat_inv(reached[1]))
             if dq[3] < 0:
                 dq = tuple(-v for v in dq)
-            s = np.linalg.norm(dq[:3])
+            s = norm(dq[:3])
             e_rot = np.zeros(3) if s < 1e-12 else np.asarray(dq[:3]) / s * 2 * np.arctan2(s, dq[3])
-            pos_err, ori_err = float(np.linalg.norm(e_pos)), float(np.linalg.norm(e_rot))
+            pos_err, ori_err = norm(e_pos), norm(e_rot)
             if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
                 break
             lin, ang = p.calculateJacobian(
-                self.ik_body, self.ik_tool, [0.0, 0.0, 0.0],
-                list(conf) + [FINGER_OPEN, FINGER_OPEN], zeros, zeros,
-                physicsClientId=self.ik_client,
+                self.ik_body, self.ik_tool, [0.0, 0.0, 0.0], conf.tolist() + fingers,
+                zeros, zeros, physicsClientId=self.ik_client,
             )  # fmt: skip
-            jac = np.vstack([np.asarray(lin)[:, :7], np.asarray(ang)[:, :7]])
+            jac = np.ascontiguousarray(np.array(lin + ang)[:, :7])
             err = np.concatenate([e_pos, e_rot])
-            step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), err)
-            conf = np.clip(conf + step, self.arm_lower, self.arm_upper)
+            step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING, err)
+            seen[conf.tobytes()] = i
+            visited.append(conf)
+            conf = np.minimum(np.maximum(conf + step, lower), upper)  # np.clip's values
+            first = seen.get(conf.tobytes())
+            if first is not None:  # a cycle: configuration i + 1 is configuration ``first``
+                conf = visited[first + (iters - first) % (i + 1 - first)]
+                break
         reached = self._ik_fk(conf)
-        pos_err = float(np.linalg.norm(np.subtract(reached[0], target[0])))
+        pos_err = norm(np.subtract(reached[0], target[0]))
         return conf, pos_err, angle_between(reached[1], target[1])
 
     def forward_kinematics(self, base_conf: Sequence[float], arm_conf: Sequence[float]) -> Pose:
@@ -274,30 +309,61 @@ class Robot:
         Null-space IK (joint limits and a rest pose) from ``seed_conf`` then random restarts;
         each candidate is iterated and accepted only when forward kinematics agrees within
         ``pos_tol`` (m) and ``ori_tol`` (rad) and it is within the joint limits.
+
+        An attempt from a given seed (``seed_conf``, else :data:`ARM_REST`) depends on the
+        target and the seed only (the private client holds the bare arm): its answer is kept
+        and used again for the same target and seed, bit for bit (cartesian paths are solved
+        again and again from the same bases, e.g. every landing corner of a drawer base).  The
+        random restarts are not kept, and draw from ``rng`` as ever.
         """
         target = multiply(invert(base_to_link0(base_conf)), tool_world)
+        seeds = [tuple(seed_conf)] if seed_conf is not None else [ARM_REST]
+        for k in range(restarts):
+            if k < len(seeds):
+                key = np.array([*target[0], *target[1], *seeds[k], pos_tol, ori_tol]).tobytes()
+                if key in self._ik_attempts:
+                    self.ik_attempts_reused += 1
+                    res = self._ik_attempts[key]
+                else:
+                    res = self._ik_attempt(target, seeds[k], pos_tol, ori_tol)
+                    self._keep(key, res)
+            else:
+                res = self._ik_attempt(target, self.sample_arm(rng), pos_tol, ori_tol)
+            if res is not None:
+                return res
+        return None
+
+    def _keep(self, key: bytes, res: IKResult | None) -> None:
+        """Keep an attempt's answer, dropping the oldest beyond :data:`IK_ATTEMPTS_KEPT`."""
+        kept = self._ik_attempts
+        while kept and len(kept) >= IK_ATTEMPTS_KEPT:
+            del kept[next(iter(kept))]
+        if IK_ATTEMPTS_KEPT > 0:
+            kept[key] = res
+
+    def _ik_attempt(
+        self, target: Pose, seed: Sequence[float], pos_tol: float, ori_tol: float
+    ) -> IKResult | None:
+        """One IK attempt from ``seed`` for ``target`` (in the arm's frame), or None."""
         lower = list(self.arm_lower) + [0.0, 0.0]
         upper = list(self.arm_upper) + [FINGER_OPEN, FINGER_OPEN]
         ranges = [hi - lo for lo, hi in zip(lower, upper, strict=True)]
-        seeds = [tuple(seed_conf)] if seed_conf is not None else [ARM_REST]
-        for k in range(restarts):
-            seed = seeds[k] if k < len(seeds) else self.sample_arm(rng)
-            self._ik_fk(seed)
-            sol = p.calculateInverseKinematics(
-                self.ik_body,
-                self.ik_tool,
-                target[0],
-                target[1],
-                lowerLimits=lower,
-                upperLimits=upper,
-                jointRanges=ranges,
-                restPoses=list(seed) + [FINGER_OPEN, FINGER_OPEN],
-                maxNumIterations=100,
-                residualThreshold=1e-5,
-                physicsClientId=self.ik_client,
-            )
-            conf = np.clip(np.asarray(sol[:7]), self.arm_lower, self.arm_upper)
-            conf, pos_err, ori_err = self._refine(conf, target, pos_tol, ori_tol)
-            if pos_err < pos_tol and ori_err < ori_tol and self.within_limits(conf):
-                return IKResult(tuple(float(v) for v in conf), pos_err, ori_err)
+        self._ik_fk(seed)
+        sol = p.calculateInverseKinematics(
+            self.ik_body,
+            self.ik_tool,
+            target[0],
+            target[1],
+            lowerLimits=lower,
+            upperLimits=upper,
+            jointRanges=ranges,
+            restPoses=list(seed) + [FINGER_OPEN, FINGER_OPEN],
+            maxNumIterations=100,
+            residualThreshold=1e-5,
+            physicsClientId=self.ik_client,
+        )
+        conf = np.clip(np.asarray(sol[:7]), self.arm_lower, self.arm_upper)
+        conf, pos_err, ori_err = self._refine(conf, target, pos_tol, ori_tol)
+        if pos_err < pos_tol and ori_err < ori_tol and self.within_limits(conf):
+            return IKResult(tuple(float(v) for v in conf), pos_err, ori_err)
         return None

@@ -20,6 +20,7 @@ a reset, collisions are ``getClosestPoints`` queries with an explicit client id.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -27,7 +28,18 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
-from .geometry import Pose, invert, multiply, pose, quat_from_yaw, yaw_of
+from .geometry import (
+    IDENTITY_QUAT,
+    Pose,
+    invert,
+    multiply,
+    pose,
+    quat_from_yaw,
+    quat_mul,
+    quat_to_matrix,
+    rotate,
+    yaw_of,
+)
 from .robot import ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, FINGER_OPEN, Robot
 
 COUNTER_TOP = 0.70
@@ -49,6 +61,7 @@ BUTTON_CENTER = (CABINET_FRONT - 0.01, -0.7, 0.55)
 SURFACE_MARGIN = 0.005
 PLACE_GAP = 1e-3  # objects rest this far above their support (no spurious contacts)
 COLLISION_TOL = 1e-4
+COLLISIONS_KEPT = 50_000  # robot_collision's answers kept per world (about 40 MB at most)
 
 #: The kinds of objects the world can build: half extents (x, y, z) and colour.  The sugar box
 #: is taller than the top drawer's clearance (0.15) and both boxes are tall enough to hide the
@@ -177,6 +190,11 @@ class World:
             self.colors[name] = tuple(rgba)
         self.body_names = {b: n for n, b in self.objects.items()}
         self.robot = Robot(c)
+        self._arm_links: list[int] | None = None  # the links _arm_over_base checks
+        self._bodies: list[int] | None = None  # the client's bodies (see state_key)
+        self._jointed: list[tuple[int, list[int]]] = []  # (body, its joints that move)
+        self._collisions: dict[tuple, bool] = {}  # robot_collision's answers by state_key
+        self.collisions_reused = 0  # for benchmarks and tests
         self.surfaces = self._surfaces()
         # State
         self.support: dict[str, tuple[str, Pose] | None] = {n: None for n in self.objects}
@@ -513,7 +531,49 @@ class World:
         """Robot (and what it holds) in collision with the world at the current state.
 
         ``ignore``: objects not checked at all; ``ignore_hand``: objects the gripper links may
-        touch (the object being grasped at the grasp configuration)."""
+        touch (the object being grasped at the grasp configuration).
+
+        Answers are kept by :meth:`state_key` (streams check the same configurations in the
+        same scene again and again: a cartesian path solved again from the same base)."""
+        key = (self.state_key(), tuple(sorted(set(ignore))), tuple(sorted(set(ignore_hand))))
+        found = self._collisions.get(key)
+        if found is not None:
+            self.collisions_reused += 1
+            return found
+        out = self._robot_collision(ignore, ignore_hand)
+        kept = self._collisions
+        while kept and len(kept) >= COLLISIONS_KEPT:
+            del kept[next(iter(kept))]
+        if COLLISIONS_KEPT > 0:
+            kept[key] = out
+        return out
+
+    def state_key(self) -> tuple:
+        """What a collision query of this client reads, as pybullet has it (whoever set it):
+        every body's base pose and the positions of its joints that move; and which objects
+        are present and held."""
+        c = self.client
+        if self._bodies is None or len(self._bodies) != p.getNumBodies(physicsClientId=c):
+            self._bodies = [p.getBodyUniqueId(i, physicsClientId=c)
+                            for i in range(p.getNumBodies(physicsClientId=c))]  # fmt: skip
+            self._jointed = []
+            for body in self._bodies:
+                moving = [j for j in range(p.getNumJoints(body, physicsClientId=c))
+                          if p.getJointInfo(body, j, physicsClientId=c)[2] != p.JOINT_FIXED]  # fmt: skip
+                if moving:
+                    self._jointed.append((body, moving))
+        values: list[float] = []
+        for body in self._bodies:
+            pos, quat = p.getBasePositionAndOrientation(body, physicsClientId=c)
+            values += pos
+            values += quat
+        for body, joints in self._jointed:
+            values += [s[0] for s in p.getJointStates(body, joints, physicsClientId=c)]
+        held = None if self.held is None else self.held.obj
+        present = tuple([n for n in self.objects if self.support[n] is not None])
+        return struct.pack(f"{len(values)}d", *values), held, present  # packed: 600 bytes
+
+    def _robot_collision(self, ignore: Iterable[str], ignore_hand: Iterable[str]) -> bool:
         r = self.robot
         hand_ok = {self.objects[n] for n in ignore_hand}
         for body in self.obstacles(ignore):
@@ -569,12 +629,19 @@ class World:
     def _arm_over_base(self, inflate: float = 0.08) -> bool:
         r = self.robot
         base = self.link_pose(r.body, r.base_link)
-        inv = invert(base)
+        inv_pos, inv_quat = invert(base)
         hx, hy, hz = BASE_HALF_EXTENTS
         top = BASE_CLEARANCE + 2 * hz
-        for link in list(r.arm_joints[3:]) + sorted(r.hand_links):
-            st = p.getLinkState(r.body, link, physicsClientId=self.client)
-            x, y, z = multiply(inv, pose(st[4]))[0]
+        # Each link's origin in the base's frame: ``multiply(inv, pose(origin))``, with the
+        # parts that do not depend on the link computed once (the same arithmetic, the same
+        # floats) and the link states read in one call.
+        origin = np.zeros(3) + rotate(IDENTITY_QUAT, inv_pos)
+        rot = quat_to_matrix(quat_mul(IDENTITY_QUAT, inv_quat))
+        links = self._arm_links
+        if links is None:
+            links = self._arm_links = list(r.arm_joints[3:]) + sorted(r.hand_links)
+        for st in p.getLinkStates(r.body, links, physicsClientId=self.client):
+            x, y, z = origin + rot @ np.array(st[4], dtype=float)
             if abs(x) < hx + inflate and abs(y) < hy + inflate and z < top + inflate:
                 return True
         return False
