@@ -18,7 +18,7 @@ plans map back unchanged.
 from __future__ import annotations
 
 import itertools
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -33,8 +33,16 @@ from .standins import StandIns, value_key
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
 # because planners need strictly positive action costs to make progress (paper §III: c_a > 0).
 DEFAULT_FUNCTION_VALUE = 1.0
-# Safety cap on the number of stream instances of one compilation.
+# Safety cap on the stream instances of one compilation that make objects or certify facts
+# some stream, rule or function domain joins over: their chains are what grows level by level.
 MAX_INSTANCES = 20000
+# Cap on the instances of *leaf tests* (:func:`leaf_tests`): each adds one fact, makes no object
+# and enables no other instance, so they are counted apart (pddlstream gives tests no
+# complexity).  Pairwise tests grow with the square of the beliefs: issue 40's kitchen of 8
+# objects passed 20,000 instances at level 4 with 16,771 of them leaf tests (test-cfree 9,292,
+# test-afree 4,572, test-vis 1,900, test-vis-robot 1,007) and 6,150 others; instantiating 100,000
+# leaf tests takes some 150 MiB.
+MAX_LEAF_TESTS = 100000
 
 
 @dataclass(frozen=True)
@@ -215,6 +223,9 @@ def instantiate(
     # Semi-naive: an instance first possible at depth d has its deepest domain fact at level
     # d - 1, so depth d only joins through the facts that reached level d - 1 (``fresh``);
     # the first depth joins through every real fact.
+    leaves = leaf_tests(streams, [s for s, kind in schemas if kind == "test"])
+    counts: Counter[str] = Counter()  # instances made, by stream
+    made_leaves = 0
     fresh: list[S.Atom] | None = None
     for depth in range(1, level + 1):
         made = []
@@ -228,11 +239,20 @@ def instantiate(
                 if inst_level > depth:
                     continue
                 seen.add(inst)
-                if len(seen) > MAX_INSTANCES:  # while building, not after the whole depth
+                counts[inst.stream] += 1
+                made_leaves += stream.name in leaves
+                # while building, not after the whole depth
+                if len(seen) - made_leaves > MAX_INSTANCES:
                     raise InstanceCapReached(
                         f"optimistic instantiation made more than {MAX_INSTANCES} stream "
                         f"instances at level {depth}; lower the level or restrict the stream "
-                        "domains"
+                        f"domains{_most(counts, leaves, False)}"
+                    )
+                if made_leaves > MAX_LEAF_TESTS:
+                    raise InstanceCapReached(
+                        f"optimistic instantiation made more than {MAX_LEAF_TESTS} instances "
+                        f"of tests no stream domain uses at level {depth}; lower the level or "
+                        f"restrict the tests' domains{_most(counts, leaves, True)}"
                     )
                 key = tuple(position[f] for f in dom_facts)
                 found.append((key, (stream, inst, binding, dom_facts, inst_level)))
@@ -337,6 +357,28 @@ def instantiate(
     objects = problem.objects + tuple(real_objects) + tuple(new_objects)
     out.problem = replace(problem, objects=objects, init=tuple(init))
     return out
+
+
+def leaf_tests(streams: S.StreamFile, tests: Iterable[S.Stream]) -> frozenset[str]:
+    """The names of the ``tests`` (streams without outputs) whose certified predicates no
+    stream, stream predicate, rule or function domain of ``streams`` mentions: their instances
+    add facts only the actions and axioms read, and never enable another instance."""
+    used = {
+        a.pred
+        for block in (*streams.streams, *streams.predicates, *streams.rules, *streams.functions)
+        for a in atoms(block.domain)
+    }
+    return frozenset(
+        t.name
+        for t in tests
+        if not t.outputs and not any(a.pred in used for a in atoms(t.certified))
+    )
+
+
+def _most(counts: Counter[str], leaves: frozenset[str], leaf: bool, k: int = 4) -> str:
+    """The ``k`` streams with most instances (leaf tests or the others), for a cap message."""
+    top = [(n, c) for n, c in counts.most_common() if (n in leaves) == leaf][:k]
+    return " (most: " + ", ".join(f"{n} {c}" for n, c in top) + ")" if top else ""
 
 
 def _standin_values(standins: StandIns | None, out: Instantiation):
