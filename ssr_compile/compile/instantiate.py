@@ -27,6 +27,7 @@ from .. import syntax as S
 from ..errors import InstanceCapReached, UnsupportedError
 from ..formulas import atoms, unify
 from .predicates import optimistic_truth, predicate_tests
+from .relevance import distinct_inputs
 from .result import PassResult
 from .standins import StandIns, value_key
 
@@ -224,6 +225,12 @@ def instantiate(
     # d - 1, so depth d only joins through the facts that reached level d - 1 (``fresh``);
     # the first depth joins through every real fact.
     leaves = leaf_tests(streams, [s for s, kind in schemas if kind == "test"])
+    # leaf tests' instances whose facts the domain never reads (pairs of an object with itself)
+    apart = distinct_inputs(domain, problem, [s for s, _k in schemas if s.name in leaves])
+
+    def unread(stream, binding) -> bool:
+        return any(binding[a] == binding[b] for a, b in apart.get(stream.name, ()))
+
     counts: Counter[str] = Counter()  # instances made, by stream
     made_leaves = 0
     fresh: list[S.Atom] | None = None
@@ -233,7 +240,7 @@ def instantiate(
             found = []
             for binding, dom_facts in _matches(stream.inputs, stream.domain, index, levels, fresh):
                 inst = Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
-                if inst in seen or inst in disabled:
+                if inst in seen or inst in disabled or unread(stream, binding):
                     continue
                 inst_level = 1 + max((levels[f] for f in dom_facts), default=0)
                 if inst_level > depth:
@@ -320,7 +327,8 @@ def instantiate(
             True
             for stream, kind in schemas
             for binding, _f in _matches(stream.inputs, stream.domain, index, levels, fresh)
-            if Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
+            if not unread(stream, binding)
+            and Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
             not in seen | disabled
         )
 
