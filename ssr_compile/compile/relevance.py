@@ -11,7 +11,8 @@ so a fact with ``?o`` equal to ``?o2`` changes no conjunction it appears in.  :f
 finds, for each test, the pairs of inputs that must differ for any of its facts to be read: those
 that every occurrence of every certified predicate (in an action, an effect's condition, an axiom
 or the goal) has in an inequality conjunct of the same conjunction.  Optimistic instantiation
-skips the other instances (13% of the kitchen's 8-object problem's pairwise tests at level 4).
+skips the other instances (on the kitchen of 8 objects at level 4, 1,239 of 9,292 test-cfree and
+264 of 1,900 test-vis instances).
 """
 
 from __future__ import annotations
