@@ -68,3 +68,91 @@ def test_the_focused_solver_stops_raising_the_level_at_the_cap(monkeypatch):
     monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 1)
     with pytest.raises(UnsupportedError, match="more than 1 stream instances at level 1"):
         solve(domain, streams, problem, from_module(tamp2d), SolveOptions(time_limit=60))
+
+
+# Leaf tests (issue 40): tests whose facts no stream domain reads are counted apart.
+
+
+def _tamp2d_counts(problem, level):
+    ex = load_example("tamp2d")
+    out = inst_mod.instantiate(ex.domain, ex.streams, problem, level=level)
+    counts: dict[str, int] = {}
+    for r in out.results:
+        counts[r.instance.stream] = counts.get(r.instance.stream, 0) + 1
+    return counts
+
+
+def test_leaf_tests_are_the_tests_no_domain_reads():
+    from ssr_compile.parse import parse_stream_file
+
+    ex = load_example("tamp2d")
+    assert inst_mod.leaf_tests(ex.streams, ex.streams.streams) == {"test-cfree"}
+    streams = parse_stream_file(
+        "(define (stream s)"
+        " (:stream near :inputs (?a ?b) :domain (and (P ?a) (P ?b)) :certified (Near ?a ?b))"
+        " (:stream far :inputs (?a ?b) :domain (and (P ?a) (P ?b)) :certified (Far ?a ?b))"
+        " (:stream gen :inputs (?a ?b) :domain (Near ?a ?b) :outputs (?c) :certified (P ?c))"
+        " (:function (Cost ?a ?b) (Far ?a ?b)))"
+    )
+    # near feeds gen's domain, far a function's: neither is a leaf; gen has outputs
+    assert inst_mod.leaf_tests(streams, streams.streams) == frozenset()
+
+
+def test_pairwise_tests_do_not_count_against_the_instance_cap(monkeypatch):
+    # 3 blocks, 2 regions, level 2: 19 instances that make objects (6 placements, 3 grasps,
+    # 9 ik, 1 motion) and 54 test-cfree instances: the pairs of the 9 poses (3 a block) of two
+    # different blocks (Unsafe reads CFree only with (not (= ?b ?b2)))
+    problem = _blocks(3)
+    counts = _tamp2d_counts(problem, 2)
+    assert counts == {"sample-placement": 6, "sample-grasp": 3, "ik": 9, "motion": 1,
+                      "test-cfree": 54}  # fmt: skip
+    ex = load_example("tamp2d")
+    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 19)
+    out = inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
+    assert len(out.results) == 73
+    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 18)
+    with pytest.raises(UnsupportedError, match=r"more than 18 stream instances at level 2.*ik 9"):
+        inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
+
+
+def test_leaf_tests_have_a_cap_of_their_own(monkeypatch):
+    ex = load_example("tamp2d")
+    problem = _blocks(3)
+    monkeypatch.setattr(inst_mod, "MAX_LEAF_TESTS", 54)
+    assert len(inst_mod.instantiate(ex.domain, ex.streams, problem, level=2).results) == 73
+    monkeypatch.setattr(inst_mod, "MAX_LEAF_TESTS", 53)
+    with pytest.raises(
+        UnsupportedError,
+        match=r"more than 53 instances of tests no stream domain uses at level 2;.*test-cfree 54",
+    ):
+        inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
+
+
+def test_a_test_is_not_instantiated_where_the_domain_cannot_read_its_fact():
+    from ssr_compile.compile.relevance import distinct_inputs
+    from ssr_compile.parse import parse_domain, parse_stream_file
+
+    ex = load_example("tamp2d")
+    problem = _blocks(2)
+    assert distinct_inputs(ex.domain, problem, ex.streams.streams) == {
+        "test-cfree": (("?b", "?b2"),)
+    }
+    out = inst_mod.instantiate(ex.domain, ex.streams, problem, level=1)
+    pairs = [r.instance.inputs for r in out.results if r.instance.stream == "test-cfree"]
+    assert sorted(pairs) == [("b0", "p0", "b1", "p1"), ("b1", "p1", "b0", "p0")]
+    # one occurrence without the inequality (here: in the goal) and every pair is read
+    text = (
+        "(define (domain d) (:predicates (P ?x) (Far ?x ?y) (G))"
+        " (:derived (G) (exists (?x ?y) (and (P ?x) (P ?y) (not (= ?x ?y)) (Far ?x ?y))))"
+        " (:action a :parameters (?x ?y) :precondition (and (not (= ?y ?x)) (Far ?x ?y))"
+        " :effect (G)))"
+    )
+    domain = parse_domain(text)
+    streams = parse_stream_file(
+        "(define (stream s) (:stream far :inputs (?a ?b) :domain (and (P ?a) (P ?b))"
+        " :certified (Far ?a ?b)))"
+    )
+    goal = parse_problem("(define (problem p) (:domain d) (:init) (:goal (G)))")
+    assert distinct_inputs(domain, goal, streams.streams) == {"far": (("?a", "?b"),)}
+    read = parse_problem("(define (problem p) (:domain d) (:init) (:goal (Far x x)))")
+    assert distinct_inputs(domain, read, streams.streams) == {}

@@ -18,7 +18,7 @@ plans map back unchanged.
 from __future__ import annotations
 
 import itertools
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -27,14 +27,23 @@ from .. import syntax as S
 from ..errors import InstanceCapReached, UnsupportedError
 from ..formulas import atoms, unify
 from .predicates import optimistic_truth, predicate_tests
+from .relevance import distinct_inputs
 from .result import PassResult
 from .standins import StandIns, value_key
 
 # The optimistic value of a cost function whose stream info gives none: the lower bound 1,
 # because planners need strictly positive action costs to make progress (paper §III: c_a > 0).
 DEFAULT_FUNCTION_VALUE = 1.0
-# Safety cap on the number of stream instances of one compilation.
+# Safety cap on the stream instances of one compilation that make objects or certify facts
+# some stream, rule or function domain joins over: their chains are what grows level by level.
 MAX_INSTANCES = 20000
+# Cap on the instances of *leaf tests* (:func:`leaf_tests`): each adds one fact, makes no object
+# and enables no other instance, so they are counted apart (pddlstream gives tests no
+# complexity).  Pairwise tests grow with the square of the beliefs: issue 40's kitchen of 8
+# objects has 22,921 instances at level 4, 19,691 of them leaf tests (test-cfree 9,292,
+# test-afree 7,492, test-vis 1,900, test-vis-robot 1,007) and 3,230 others (2,809 base motions);
+# 100,000 leaf tests take some 175 MiB (tamp2d, 316 blocks, level 1: 99,540 test-cfree).
+MAX_LEAF_TESTS = 100000
 
 
 @dataclass(frozen=True)
@@ -215,6 +224,15 @@ def instantiate(
     # Semi-naive: an instance first possible at depth d has its deepest domain fact at level
     # d - 1, so depth d only joins through the facts that reached level d - 1 (``fresh``);
     # the first depth joins through every real fact.
+    leaves = leaf_tests(streams, [s for s, kind in schemas if kind == "test"])
+    # leaf tests' instances whose facts the domain never reads (pairs of an object with itself)
+    apart = distinct_inputs(domain, problem, [s for s, _k in schemas if s.name in leaves])
+
+    def unread(stream, binding) -> bool:
+        return any(binding[a] == binding[b] for a, b in apart.get(stream.name, ()))
+
+    counts: Counter[str] = Counter()  # instances made, by stream
+    made_leaves = 0
     fresh: list[S.Atom] | None = None
     for depth in range(1, level + 1):
         made = []
@@ -222,17 +240,26 @@ def instantiate(
             found = []
             for binding, dom_facts in _matches(stream.inputs, stream.domain, index, levels, fresh):
                 inst = Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
-                if inst in seen or inst in disabled:
+                if inst in seen or inst in disabled or unread(stream, binding):
                     continue
                 inst_level = 1 + max((levels[f] for f in dom_facts), default=0)
                 if inst_level > depth:
                     continue
                 seen.add(inst)
-                if len(seen) > MAX_INSTANCES:  # while building, not after the whole depth
+                counts[inst.stream] += 1
+                made_leaves += stream.name in leaves
+                # while building, not after the whole depth
+                if len(seen) - made_leaves > MAX_INSTANCES:
                     raise InstanceCapReached(
                         f"optimistic instantiation made more than {MAX_INSTANCES} stream "
                         f"instances at level {depth}; lower the level or restrict the stream "
-                        "domains"
+                        f"domains{_most(counts, leaves, False)}"
+                    )
+                if made_leaves > MAX_LEAF_TESTS:
+                    raise InstanceCapReached(
+                        f"optimistic instantiation made more than {MAX_LEAF_TESTS} instances "
+                        f"of tests no stream domain uses at level {depth}; lower the level or "
+                        f"restrict the tests' domains{_most(counts, leaves, True)}"
                     )
                 key = tuple(position[f] for f in dom_facts)
                 found.append((key, (stream, inst, binding, dom_facts, inst_level)))
@@ -300,7 +327,8 @@ def instantiate(
             True
             for stream, kind in schemas
             for binding, _f in _matches(stream.inputs, stream.domain, index, levels, fresh)
-            if Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
+            if not unread(stream, binding)
+            and Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
             not in seen | disabled
         )
 
@@ -337,6 +365,28 @@ def instantiate(
     objects = problem.objects + tuple(real_objects) + tuple(new_objects)
     out.problem = replace(problem, objects=objects, init=tuple(init))
     return out
+
+
+def leaf_tests(streams: S.StreamFile, tests: Iterable[S.Stream]) -> frozenset[str]:
+    """The names of the ``tests`` (streams without outputs) whose certified predicates no
+    stream, stream predicate, rule or function domain of ``streams`` mentions: their instances
+    add facts only the actions and axioms read, and never enable another instance."""
+    used = {
+        a.pred
+        for block in (*streams.streams, *streams.predicates, *streams.rules, *streams.functions)
+        for a in atoms(block.domain)
+    }
+    return frozenset(
+        t.name
+        for t in tests
+        if not t.outputs and not any(a.pred in used for a in atoms(t.certified))
+    )
+
+
+def _most(counts: Counter[str], leaves: frozenset[str], leaf: bool, k: int = 4) -> str:
+    """The ``k`` streams with most instances (leaf tests or the others), for a cap message."""
+    top = [(n, c) for n, c in counts.most_common() if (n in leaves) == leaf][:k]
+    return " (most: " + ", ".join(f"{n} {c}" for n, c in top) + ")" if top else ""
 
 
 def _standin_values(standins: StandIns | None, out: Instantiation):
