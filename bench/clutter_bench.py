@@ -223,16 +223,19 @@ def main(argv: list[str] | None = None) -> int:
         done = {(r["kind"], r["objects"], r["hiders"], r["seed"]) for r in records}
         journal = open(args.jsonl, "a") if args.jsonl else None  # noqa: SIM115
         with tempfile.TemporaryDirectory() as tmp:
-            todo = []
+            files = {}
             for n in args.objects:
                 for k in args.hiders:
-                    if k >= n:
-                        continue
-                    path = Path(tmp) / f"{args.kind}_n{n}_k{k}.toml"
-                    path.write_text(generate(args.kind, n, k))
-                    todo += [
-                        (path, n, k, s) for s in args.seeds if (args.kind, n, k, s) not in done
-                    ]
+                    if k < n:
+                        files[n, k] = Path(tmp) / f"{args.kind}_n{n}_k{k}.toml"
+                        files[n, k].write_text(generate(args.kind, n, k))
+            # seed by seed across the family: a run stopped early has every N and K
+            todo = [
+                (path, n, k, s)
+                for s in args.seeds
+                for (n, k), path in files.items()
+                if (args.kind, n, k, s) not in done
+            ]
 
             def work(item):
                 path, n, k, seed = item
