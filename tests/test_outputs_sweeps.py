@@ -318,6 +318,14 @@ def _pid_file(seed: int) -> Path:
     return pid_file(seed)
 
 
+def _wait_for_episode(pids: Path) -> None:
+    """Until the fixture's episode has written its two pids (at most 30 s)."""
+    for _ in range(300):
+        if pids.exists() and len(pids.read_text().split()) == 2:
+            return
+        time.sleep(0.1)
+
+
 @pytest.mark.parametrize("how", ["SIGINT", "SIGTERM"])
 def test_a_stopped_sweep_leaves_no_temporary_folders(tmp_path, how):
     tmpdir = Path(tempfile.mkdtemp(prefix="ssr-t-"))  # short: its own temporary directory
@@ -328,10 +336,7 @@ def test_a_stopped_sweep_leaves_no_temporary_folders(tmp_path, how):
         tmpdir, tmp_path / "out", f"{FIXTURE}:tmp-hang", "--seeds", str(seed), "--wall-limit", "300"
     )
     try:
-        for _ in range(300):
-            if pids.exists() and len(pids.read_text().split()) == 2:
-                break
-            time.sleep(0.1)
+        _wait_for_episode(pids)
         assert pids.exists(), sweep.stderr.read() if sweep.poll() is not None else "no episode"
         episode_tmp = [p for p in tmpdir.rglob("ssr-fd-*")]
         assert episode_tmp, "the fixture's planner folder is there while the episode runs"
@@ -361,10 +366,7 @@ def test_the_folder_of_a_killed_sweep_is_removed_by_the_next(tmp_path, monkeypat
         tmpdir, tmp_path / "out", f"{FIXTURE}:tmp-hang", "--seeds", str(seed), "--wall-limit", "300"
     )
     try:
-        for _ in range(300):
-            if pids.exists() and len(pids.read_text().split()) == 2:
-                break
-            time.sleep(0.1)
+        _wait_for_episode(pids)
         helper = int(pids.read_text().split()[1])
         sweep.kill()  # SIGKILL: nothing of the sweep's own runs
         sweep.wait(30)
