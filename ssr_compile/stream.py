@@ -44,7 +44,10 @@ class StreamInfo:
     ``deferrable``: may its evaluation wait until the next replanning (paper §VII)?  Mark only
     streams that are expensive *and* almost always succeed (motion planning).
     ``p_success``: probability that a call succeeds (orders the stream plan: likely failures
-    first).  ``cost``: expected cost of a call, in seconds or any consistent unit.
+    first).  0 means a call on values drawn for a plan is not worth planning on: the stream
+    is instantiated over real inputs only, never over an optimistic one (pddlstream's
+    ``p_success=0``, whose effort is infinite: continuous_tamp's ``t-region``, which a
+    placement drawn for another region fails).  ``cost``: expected cost of a call, in seconds or any consistent unit.
     ``optimistic_value``: for a cost function, the value planned with before evaluation (a
     lower bound; default 1).  ``kind``: "generator" (default for streams with outputs),
     "function" (at most one output tuple), or "test".  ``constant_outputs``: the outputs are
@@ -86,6 +89,11 @@ class StreamInfo:
     eager: bool = False
     optimistic: Callable | None = None
 
+    def __post_init__(self):
+        p = self.p_success
+        if isinstance(p, bool) or not isinstance(p, (int, float)) or not 0.0 <= p <= 1.0:
+            raise ValueError(f"StreamInfo p_success must be a number from 0 to 1, not {p!r}")
+
     @classmethod
     def of(cls, value: StreamInfo | Mapping[str, Any] | None, name: str) -> StreamInfo:
         if value is None:
@@ -99,7 +107,10 @@ class StreamInfo:
                 raise StreamError(
                     f"STREAM_INFO['{name}'] has unknown field(s) {sorted(unknown)}; expected {sorted(known)}"
                 )
-            return cls(**value)
+            try:
+                return cls(**value)
+            except ValueError as e:
+                raise StreamError(f"STREAM_INFO['{name}']: {e}") from None
         raise StreamError(
             f"STREAM_INFO['{name}'] must be a StreamInfo or a dict, not {type(value).__name__}"
         )

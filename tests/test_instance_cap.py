@@ -156,3 +156,23 @@ def test_a_test_is_not_instantiated_where_the_domain_cannot_read_its_fact():
     assert distinct_inputs(domain, goal, streams.streams) == {"far": (("?a", "?b"),)}
     read = parse_problem("(define (problem p) (:domain d) (:init) (:goal (Far x x)))")
     assert distinct_inputs(domain, read, streams.streams) == {}
+
+
+def test_a_stream_that_never_succeeds_optimistically_is_instantiated_over_real_inputs_only():
+    # StreamInfo.p_success 0 (pddlstream's infinite effort): no instance over an optimistic
+    # input, every instance over real inputs as before
+    ex = load_example("tamp2d")
+    problem = _blocks(2)
+    full = inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
+    real = inst_mod.instantiate(ex.domain, ex.streams, problem, level=2, real_only={"test-cfree"})
+
+    def cfree(out):
+        return {r.instance.inputs for r in out.results if r.instance.stream == "test-cfree"}
+
+    optimistic = {i for i in cfree(full) if any(x in full.objects for x in i)}
+    assert optimistic  # placements drawn for a plan are tested optimistically by default
+    assert cfree(real) == cfree(full) - optimistic
+    assert cfree(real) == {("b0", "p0", "b1", "p1"), ("b1", "p1", "b0", "p0")}
+    # the other streams are untouched
+    others = {r.instance for r in full.results if r.instance.stream != "test-cfree"}
+    assert others == {r.instance for r in real.results if r.instance.stream != "test-cfree"}

@@ -158,3 +158,26 @@ def test_giving_up_at_the_maximum_level_says_so(capsys):
     first = out.splitlines()[0]
     assert re.fullmatch(r"no plan: no plan found up to level 1 in \d+\.\d s \(.*\)", first), first
     assert "unsolvable" not in out
+
+
+@pytest.mark.parametrize(
+    "replace, message",
+    [
+        (
+            "STREAM_INFO = {**STREAM_INFO, 'test-cfree': StreamInfo(kind='test', p_success=1.5)}",
+            "StreamInfo p_success must be a number from 0 to 1, not 1.5",
+        ),
+        (
+            "STREAM_INFO = {**STREAM_INFO, 'test-cfree': {'kind': 'test', 'p_success': -0.1}}",
+            "STREAM_INFO['test-cfree']: StreamInfo p_success must be a number from 0 to 1",
+        ),
+    ],
+    ids=["StreamInfo", "dict"],
+)
+def test_a_success_probability_outside_0_1_is_refused(tmp_path, capsys, replace, message):
+    mod = _module(tmp_path, "from ssr_compile.stream import StreamInfo\n" + replace)
+    code = main(["solve", D, S, P, "--streams", mod, "--time-limit", "60"])
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert "plan (" not in out

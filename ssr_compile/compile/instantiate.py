@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import itertools
 from collections import Counter, defaultdict
-from collections.abc import Iterable, Mapping
+from collections.abc import Container, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -149,6 +149,7 @@ def instantiate(
     exhausted: Iterable[Instance] = (),
     share: bool = False,
     standins: StandIns | None = None,
+    real_only: Container[str] = frozenset(),
 ) -> Instantiation:
     """Optimistically instantiate ``streams`` over ``problem`` up to ``level``.
 
@@ -165,6 +166,10 @@ def instantiate(
     (``merged``); a test's instance is made only when its stand-in holds; a cost function's
     term takes its stand-in's value.  (An instance sharing its outputs, with ``share``, gets
     no output stand-ins: its outputs stand for every value.)
+
+    ``real_only``: streams instantiated over real inputs only (``StreamInfo.p_success`` 0,
+    pddlstream's infinite effort: a test that never holds for a value drawn for a plan, such
+    as continuous_tamp's ``t-region`` of a placement drawn in another region).
 
     ``evaluated`` are real results (their facts join the initial state at level 0);
     ``disabled`` instances are not instantiated optimistically (they failed at this level);
@@ -242,6 +247,8 @@ def instantiate(
                 inst = Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
                 if inst in seen or inst in disabled or unread(stream, binding):
                     continue
+                if stream.name in real_only and any(x in out.objects for x in inst.inputs):
+                    continue  # p_success 0: never planned over an optimistic input
                 inst_level = 1 + max((levels[f] for f in dom_facts), default=0)
                 if inst_level > depth:
                     continue

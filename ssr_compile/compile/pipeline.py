@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import gc
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Container, Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 from .. import syntax as S
@@ -134,6 +134,7 @@ def compile_problem(
     share: bool = False,
     leaves: bool | None = None,
     standins: StandIns | None = None,
+    real_only: Container[str] = frozenset(),
 ) -> Compiled:
     """Compile a PDDLStream problem to a plain domain and problem for ``caps``."""
     passes: list[PassResult] = [objects_as_constants(domain, problem)]
@@ -151,6 +152,7 @@ def compile_problem(
             real_function_values=real_function_values,
             share=share,
             standins=standins,
+            real_only=real_only,
         )
         passes.append(inst)
     source = passes[-1]

@@ -22,7 +22,7 @@ import math
 import time
 from dataclasses import replace
 
-from ..compile.instantiate import Result
+from ..compile.instantiate import Result, real_instances
 from ..errors import InstanceCapReached, PlannerFailure, SSRError
 from ..planners.base import UNSOLVABLE
 from ..planners.costs import plan_cost
@@ -40,6 +40,9 @@ SLICE_MIN = 1.0
 # (a planner that is not cost-optimal is asked again for a cheaper plan) before it is the
 # solution (:meth:`FocusedLoop.run`)
 IMPROVEMENTS = 2
+# Instances of a test evaluated when one over real values failed a stream plan, at most
+# (:meth:`FocusedLoop.test_siblings`)
+SIBLINGS = 100
 
 
 class FocusedLoop(SolverLoop):
@@ -255,6 +258,8 @@ class FocusedLoop(SolverLoop):
                 "timeout",
                 message=f"time limit of {self.time_limit:g} s reached while evaluating streams",
             )
+        if not evaluation.ok and evaluation.failed_real_tests and self.incumbent is None:
+            self.test_siblings(evaluation.failed_real_tests)
         if not evaluation.ok and evaluation.real_test_failed and self.incumbent is not None:
             self.since_incumbent += 1
         if evaluation.ok and not inst.shared:
@@ -266,6 +271,35 @@ class FocusedLoop(SolverLoop):
                 # a suboptimal planner may still find a cheaper one
                 self.incumbent, self.since_incumbent = found, 0
         return None
+
+    def test_siblings(self, failed) -> None:
+        """Tests over real values that failed a stream plan (a planner call spent on a pair of
+        values that do not go together): the same test over the same problem objects and
+        every other real value is evaluated now, up to SIBLINGS per failed instance.
+        Otherwise the planner proposes those combinations one planner call each
+        (continuous_tamp, tight(N), seeds 0 and 7: two placements per block drawn into the
+        red region that pair with no partner, then some 25 planner calls, one per pair)."""
+        fixed_names = {o.name for o in self.problem.objects} | {
+            c.name for c in self.domain.constants
+        }
+        for inst in failed:
+            fixed = [(i, x) for i, x in enumerate(inst.inputs) if x in fixed_names]
+            found = real_instances(
+                self.streams, self.problem, self.ev.results, functions=(), tests=(inst.stream,)
+            )
+            count = 0
+            for other in found:
+                if count >= SIBLINGS or time.monotonic() >= self.deadline:
+                    break
+                if other.stream != inst.stream or other in self.ev.outcomes:
+                    continue
+                if any(other.inputs[i] != x for i, x in fixed):
+                    continue
+                ok = self.ev.evaluate(Result(other, (), (), (), 0), {})
+                self.ev.record(ok, other.stream)
+                count += 1
+            if count:
+                self.say(f"  {count} more {inst.stream} over the same objects' other values")
 
     def bound_solution(self, compiled, plan, inst, binding, later=()) -> Solution | None:
         """Every result of the stream plan succeeded (``binding``: optimistic -> real): the

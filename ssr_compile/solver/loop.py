@@ -60,6 +60,8 @@ class SolverLoop:
             self.ev.fact_complexity.update((f, 0) for f in r.certified)
         self.say = options.progress or (lambda msg: None)
         self.standins = StandIns.of(module, self.values.value)
+        # streams declared never to succeed on optimistic values (StreamInfo.p_success 0)
+        self.real_only = frozenset(n for n, i in module.info.items() if i.p_success <= 0)
         self.optimistic_values = {
             f.name: module.info_for(f.name).optimistic_value
             for f in streams.functions
@@ -172,6 +174,7 @@ class SolverLoop:
             share=self.options.share,
             leaves=self.options.leaves,
             standins=self.standins,
+            real_only=self.real_only,
         )
         self.last_compile = time.perf_counter() - started
         self.stats.compile_time += self.last_compile

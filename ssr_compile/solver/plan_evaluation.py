@@ -87,6 +87,7 @@ class StreamPlanEvaluation:
         self.rejected = False  # did a test of this stream plan reject a draw?
         # did a test over real values only (no output of this stream plan) fail?
         self.real_test_failed = False
+        self.failed_real_tests: list = []  # those tests' instances (see FocusedLoop.siblings)
         self.ok = False
 
     def _rejected_limits(self) -> dict[int, int]:
@@ -172,6 +173,7 @@ class StreamPlanEvaluation:
                 x in self.producer for x in res.instance.inputs
             ):
                 self.real_test_failed = True
+                self.failed_real_tests.append(bound_instance(res, self.binding))
             self._blame(res, redraw)
         return all_ok, redraw
 
