@@ -44,10 +44,10 @@ class StreamInfo:
     ``deferrable``: may its evaluation wait until the next replanning (paper §VII)?  Mark only
     streams that are expensive *and* almost always succeed (motion planning).
     ``p_success``: probability that a call succeeds (orders the stream plan: likely failures
-    first).  0 means a call on values drawn for a plan is not worth planning on: the stream
-    is instantiated over real inputs only, never over an optimistic one (pddlstream's
-    ``p_success=0``, whose effort is infinite: continuous_tamp's ``t-region``, which a
-    placement drawn for another region fails).  ``cost``: expected cost of a call, in seconds or any consistent unit.
+    first).  0: the stream is instantiated over real inputs only, never over an optimistic
+    one (pddlstream's ``p_success=0``, whose effort is infinite: continuous_tamp's
+    ``t-region``, which a placement drawn for another region fails).  ``cost``: expected
+    cost of a call, in seconds or any consistent unit.
     ``optimistic_value``: for a cost function, the value planned with before evaluation (a
     lower bound; default 1).  ``kind``: "generator" (default for streams with outputs),
     "function" (at most one output tuple), or "test".  ``constant_outputs``: the outputs are

@@ -154,6 +154,13 @@ class Evaluation:
             binding[opt] = real
         return True
 
+    def evaluate_real(self, inst: Instance) -> bool:
+        """Evaluate an instance over real inputs only (no output bound to a plan) and count
+        its outcome."""
+        ok = self.evaluate(Result(inst, (), (), (), 0), {})
+        self.record(ok, inst.stream)
+        return ok
+
     def record(self, ok: bool, name: str) -> None:
         """Count the outcome of the last :meth:`evaluate` if it really called the stream."""
         if not self.called:
@@ -206,9 +213,7 @@ def evaluate_eagerly(
             continue
         if inst.kind == "stream" and (inst in ev.tried or inst in ev.exhausted):
             continue
-        res = Result(inst, (), (), (), 0)
-        ok = ev.evaluate(res, {})
-        ev.record(ok, inst.stream)
+        ev.evaluate_real(inst)
 
 
 def bound_instance(res: Result, binding: dict[str, str]) -> Instance:

@@ -260,7 +260,7 @@ class FocusedLoop(SolverLoop):
             )
         if not evaluation.ok and evaluation.failed_real_tests and self.incumbent is None:
             self.test_siblings(evaluation.failed_real_tests)
-        if not evaluation.ok and evaluation.real_test_failed and self.incumbent is not None:
+        if not evaluation.ok and evaluation.failed_real_tests and self.incumbent is not None:
             self.since_incumbent += 1
         if evaluation.ok and not inst.shared:
             found = self.bound_solution(compiled, plan, inst, evaluation.binding, later)
@@ -282,21 +282,23 @@ class FocusedLoop(SolverLoop):
         fixed_names = {o.name for o in self.problem.objects} | {
             c.name for c in self.domain.constants
         }
+        by_stream = {
+            name: real_instances(
+                self.streams, self.problem, self.ev.results, functions=(), tests=(name,)
+            )
+            for name in {inst.stream for inst in failed}
+        }
         for inst in failed:
             fixed = [(i, x) for i, x in enumerate(inst.inputs) if x in fixed_names]
-            found = real_instances(
-                self.streams, self.problem, self.ev.results, functions=(), tests=(inst.stream,)
-            )
             count = 0
-            for other in found:
+            for other in by_stream[inst.stream]:
                 if count >= SIBLINGS or time.monotonic() >= self.deadline:
                     break
                 if other.stream != inst.stream or other in self.ev.outcomes:
                     continue
                 if any(other.inputs[i] != x for i, x in fixed):
                     continue
-                ok = self.ev.evaluate(Result(other, (), (), (), 0), {})
-                self.ev.record(ok, other.stream)
+                self.ev.evaluate_real(other)
                 count += 1
             if count:
                 self.say(f"  {count} more {inst.stream} over the same objects' other values")

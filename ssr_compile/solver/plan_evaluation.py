@@ -85,9 +85,9 @@ class StreamPlanEvaluation:
         self.position = {id(r): i for i, r in enumerate(ordered)}
         self.rejected_limit = self._rejected_limits()
         self.rejected = False  # did a test of this stream plan reject a draw?
-        # did a test over real values only (no output of this stream plan) fail?
-        self.real_test_failed = False
-        self.failed_real_tests: list = []  # those tests' instances (see FocusedLoop.siblings)
+        # the tests over real values only (no output of this stream plan) that failed
+        # (FocusedLoop.test_siblings)
+        self.failed_real_tests: list[Instance] = []
         self.ok = False
 
     def _rejected_limits(self) -> dict[int, int]:
@@ -172,7 +172,6 @@ class StreamPlanEvaluation:
             if res.instance.kind == "test" and not any(
                 x in self.producer for x in res.instance.inputs
             ):
-                self.real_test_failed = True
                 self.failed_real_tests.append(bound_instance(res, self.binding))
             self._blame(res, redraw)
         return all_ok, redraw
