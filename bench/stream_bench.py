@@ -47,8 +47,11 @@ def main(argv: list[str] | None = None) -> None:
     base = next(iter(ks.inv_reach("block", p, g)))[0]
     pre = ks.inv_kin("block", p, g, base)[0]
     tool = w.robot.forward_kinematics(base, pre)
+    far = ((tool[0][0] + 0.6, tool[0][1], tool[0][2] + 0.6), tool[1])
     rows = [
         ("IK (tool pose, restarts)", lambda: w.robot.inverse_kinematics(base, tool, rng)),
+        # 0.85 m beyond a pose the arm reaches: every attempt fails (all the restarts spent)
+        ("IK (out of reach, restarts)", lambda: w.robot.inverse_kinematics(base, far, rng)),
         (
             "inv-kin (grasp + approach)",
             lambda: ks._kin_cache.clear() or ks.inv_kin("block", p, g, base),

@@ -10,6 +10,7 @@ solution is verified by forward kinematics.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import tempfile
@@ -64,6 +65,10 @@ FINGER_OPEN = 0.04
 #: IK attempts from a given seed kept per robot (see :meth:`Robot.inverse_kinematics`).
 IK_ATTEMPTS_KEPT = 50_000
 _DAMPING = 1e-4 * np.eye(6)  # of the damped least-squares step in Robot._refine
+# An IK refinement stops after STALL steps that brought its error no lower than STALL_GAIN
+# times the best it had reached (Robot._refine)
+STALL = 8
+STALL_GAIN = 0.98
 
 #: A comfortable arm configuration (arm folded up, hand forward and down).
 ARM_REST = (0.0, -0.6, 0.0, -2.4, 0.0, 1.9, 0.785)
@@ -249,14 +254,18 @@ class Robot:
     ) -> tuple[np.ndarray, float, float]:
         """Damped least-squares refinement with the Jacobian, clamped to the joint limits.
 
-        Each step is a function of the configuration alone: when a configuration comes back
-        (bit for bit, the clamp at a joint limit often brings that about), the iterates go
-        round that cycle until the last one, which is then read off the cycle."""
+        An attempt that stalls -- :data:`STALL` steps without bringing its error (the larger of
+        the position and orientation errors, each over its tolerance) below :data:`STALL_GAIN`
+        of the best so far -- stops there with the best iterate it reached.  Stalled attempts
+        were four fifths of the refinement's steps (a target out of reach, or an arm held at
+        a joint limit, circles for all 60), and almost all of them fail; one that converges
+        gains more than that every few steps (Stow, seed 1: 5,219 attempts succeeded, 96 of
+        them after more than 8 steps, each still improving).  Iterates that go round a cycle
+        (the clamp at a joint limit often brings a configuration back bit for bit) stall."""
         zeros = [0.0] * 9
         fingers = [FINGER_OPEN, FINGER_OPEN]
         lower, upper = self.arm_lower, self.arm_upper
-        seen: dict[bytes, int] = {}  # configuration -> the iteration it starts
-        visited: list[np.ndarray] = []
+        best, best_at, best_conf = math.inf, 0, conf  # see STALL
         for i in range(iters):
             reached = self._ik_fk(conf)
             e_pos = np.subtract(target[0], reached[0])
@@ -268,6 +277,14 @@ class Robot:
             pos_err, ori_err = norm(e_pos), norm(e_rot)
             if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
                 break
+            err_now = max(pos_err / pos_tol, ori_err / ori_tol)
+            if err_now < best:
+                if err_now < best * STALL_GAIN:
+                    best_at = i
+                best, best_conf = err_now, conf
+            if i - best_at >= STALL:
+                conf = best_conf
+                break
             lin, ang = p.calculateJacobian(
                 self.ik_body, self.ik_tool, [0.0, 0.0, 0.0], conf.tolist() + fingers,
                 zeros, zeros, physicsClientId=self.ik_client,
@@ -275,13 +292,7 @@ class Robot:
             jac = np.ascontiguousarray(np.array(lin + ang)[:, :7])
             err = np.concatenate([e_pos, e_rot])
             step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING, err)
-            seen[conf.tobytes()] = i
-            visited.append(conf)
             conf = np.minimum(np.maximum(conf + step, lower), upper)  # np.clip's values
-            first = seen.get(conf.tobytes())
-            if first is not None:  # a cycle: configuration i + 1 is configuration ``first``
-                conf = visited[first + (iters - first) % (i + 1 - first)]
-                break
         reached = self._ik_fk(conf)
         pos_err = norm(np.subtract(reached[0], target[0]))
         return conf, pos_err, angle_between(reached[1], target[1])

@@ -14,7 +14,15 @@ import pytest
 from ssr_compile.sim import robot as robot_mod
 from ssr_compile.sim import world as world_mod
 from ssr_compile.sim.geometry import angle_between, invert, multiply, norm, pose, quat_inv, quat_mul
-from ssr_compile.sim.robot import ARM_REST, ARM_TUCK, BASE_CLEARANCE, BASE_HALF_EXTENTS, Robot
+from ssr_compile.sim.robot import (
+    ARM_REST,
+    ARM_TUCK,
+    BASE_CLEARANCE,
+    BASE_HALF_EXTENTS,
+    STALL,
+    STALL_GAIN,
+    Robot,
+)
 from ssr_compile.sim.world import World
 
 
@@ -181,11 +189,14 @@ def test_kept_ik_attempts_are_bounded(robots, monkeypatch):
     assert r.ik_attempts_reused == 1
 
 
-def _refine_before(r: Robot, conf, target, pos_tol, ori_tol, iters=60):
-    """The refinement as it was, with the configurations it went through."""
+def _refine_before(r: Robot, conf, target, pos_tol, ori_tol, iters=60, stall=None):
+    """The refinement as it was, with the configurations it went through; ``stall``: (steps,
+    gain) of the stall rule, written out step by step (the best iterate so far, and where its
+    error last fell below ``gain`` times the best before)."""
     zeros = [0.0] * 9
     went = [conf]
-    for _ in range(iters):
+    best, best_at, best_conf = np.inf, 0, conf
+    for i in range(iters):
         reached = r._ik_fk(conf)
         e_pos = np.subtract(target[0], reached[0])
         dq = quat_mul(target[1], quat_inv(reached[1]))
@@ -196,6 +207,14 @@ def _refine_before(r: Robot, conf, target, pos_tol, ori_tol, iters=60):
         pos_err, ori_err = float(np.linalg.norm(e_pos)), float(np.linalg.norm(e_rot))
         if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
             break
+        if stall is not None:
+            e = max(pos_err / pos_tol, ori_err / ori_tol)
+            if e < best:
+                best_at = i if e < best * stall[1] else best_at
+                best, best_conf = e, conf
+            if i - best_at >= stall[0]:
+                conf = best_conf
+                break
         lin, ang = p.calculateJacobian(
             r.ik_body, r.ik_tool, [0.0, 0.0, 0.0], list(conf) + [0.04, 0.04], zeros, zeros,
             physicsClientId=r.ik_client,
@@ -210,19 +229,53 @@ def _refine_before(r: Robot, conf, target, pos_tol, ori_tol, iters=60):
     return (conf, pos_err, angle_between(reached[1], target[1])), went
 
 
-def test_refinement_answers_as_before_cycles_included(robots):
+def test_refinement_answers_as_written_out_cycles_and_stalls_included(robots):
     r, _ = robots
     rng = np.random.default_rng(10)
-    cycled = solved = 0
+    cycled = solved = stalled = 0
     for _ in range(150):
         target = pose(rng.uniform((-0.2, -0.8, 0.0), (1.0, 0.8, 1.2)), rng.normal(size=4))
         start = np.asarray(r.sample_arm(rng))
-        want, went = _refine_before(r, start, target, 2e-3, 2e-2)
+        want, went = _refine_before(r, start, target, 2e-3, 2e-2, stall=(STALL, STALL_GAIN))
         got = r._refine(start, target, 2e-3, 2e-2)
         assert got[0].tobytes() == want[0].tobytes() and got[1:] == want[1:]
         cycled += len({q.tobytes() for q in went}) < len(went)
         solved += want[1] < 2e-3 and want[2] < 2e-2
-    assert cycled > 0 and solved > 0  # both cases were compared
+        stalled += len(went) < 61 and not (want[1] < 1e-3 and want[2] < 1e-2)
+    assert cycled > 0 and solved > 0 and stalled > 0  # each case was compared
+
+
+def test_stalled_refinements_stop_early_and_lose_few_solutions(robots, monkeypatch):
+    """Against the refinement without the stall rule, from where pybullet's IK leaves random
+    targets (as in an IK attempt): a few of its solutions are lost (they wandered from a poor
+    start and converged late, by chance), for a fraction of the steps."""
+    r, _ = robots
+    rng = np.random.default_rng(11)
+    starts = []
+    refine = r._refine
+
+    def keep(conf, target, *args, **kwargs):
+        starts.append((conf.copy(), target))
+        return refine(conf, target, *args, **kwargs)
+
+    monkeypatch.setattr(r, "_refine", keep)
+    for _ in range(200):
+        target = pose(rng.uniform((-0.2, -0.8, 0.0), (1.0, 0.8, 1.2)), rng.normal(size=4))
+        r._ik_attempt(target, ARM_REST if rng.uniform() < 0.5 else r.sample_arm(rng), 2e-3, 2e-2)
+    monkeypatch.undo()
+    steps = {"before": 0, "now": 0}
+    solved = {"before": 0, "now": 0, "lost": 0}
+    for start, target in starts:
+        ok = {}
+        for name, stall in (("before", None), ("now", (STALL, STALL_GAIN))):
+            (_, pos_err, ori_err), went = _refine_before(r, start, target, 2e-3, 2e-2, stall=stall)
+            steps[name] += len(went)
+            ok[name] = pos_err < 2e-3 and ori_err < 2e-2
+            solved[name] += ok[name]
+        solved["lost"] += ok["before"] and not ok["now"]
+    assert solved["before"] >= 40
+    assert solved["lost"] <= solved["before"] / 10
+    assert steps["now"] < 0.4 * steps["before"]
 
 
 @pytest.fixture
