@@ -14,7 +14,7 @@ import pytest
 from ssr_compile import syntax as S
 from ssr_compile.compile.constraints import ASSIGNED, MAY, constrain_plan
 from ssr_compile.compile.pipeline import compile_problem
-from ssr_compile.parse import parse_domain, parse_problem
+from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
 from ssr_compile.planners import get_planner
 from ssr_compile.planners.validate import validate_plan
 from ssr_compile.solver.preimage import PlanInvalid, plan_preimage
@@ -385,3 +385,63 @@ def test_up_fast_downward_skips_invariant_synthesis_on_a_constrained_ground_task
     ]
     with pytest.raises(SSRError, match="takes no translator options"):
         get_planner("up:fast-downward-opt", invariants="off")
+
+
+DRAWER = """
+(define (domain drawer) (:requirements :strips)
+  (:predicates (atconf ?q) (motion ?q1 ?t ?q2) (pullkin ?d ?q1 ?q2) (pushkin ?d ?q1 ?q2)
+               (closed ?d) (open ?d) (seen ?d))
+  (:action move :parameters (?q1 ?t ?q2)
+    :precondition (and (atconf ?q1) (motion ?q1 ?t ?q2))
+    :effect (and (atconf ?q2) (not (atconf ?q1))))
+  (:action pull :parameters (?d ?q1 ?q2)
+    :precondition (and (atconf ?q1) (closed ?d) (pullkin ?d ?q1 ?q2))
+    :effect (and (atconf ?q2) (not (atconf ?q1)) (open ?d) (seen ?d) (not (closed ?d))))
+  (:action push :parameters (?d ?q1 ?q2)
+    :precondition (and (atconf ?q1) (open ?d) (pushkin ?d ?q1 ?q2))
+    :effect (and (atconf ?q2) (not (atconf ?q1)) (closed ?d) (not (open ?d)))))
+"""
+# The old plan pushed d shut, ending at q2, then: move from q2, pull d open, move, and push d
+# shut again with the same push -- ending at q2 once more.  After the first push the arm is
+# observed at aq0, where no push ends: q2, one free variable for both uses, fits no value
+# (Swap's constrained attempts that fell back, one cycle in three).
+DRAWER_PROBLEM = """
+(define (problem drawer-replan) (:domain drawer)
+  (:objects d aq0 qa qb qc qd t1 t2)
+  (:init (atconf aq0) (closed d) (motion aq0 t1 qa) (pullkin d qa qb) (motion qb t2 qc)
+         (pushkin d qc qd))
+  (:goal (and (seen d) (closed d))))
+"""
+DRAWER_TAIL = [
+    ("move", ("q2", "t7", "q3")),
+    ("pull", ("d", "q3", "q4")),
+    ("move", ("q4", "t8", "q1")),
+    ("push", ("d", "q1", "q2")),
+]
+
+
+def test_a_tail_no_value_fits_is_unsolvable_without_asking_the_planner():
+    from ssr_compile.solver import ReplanState, SolveOptions, solve
+    from ssr_compile.stream import StreamsModule
+
+    d, p = parse_domain(DRAWER), parse_problem(DRAWER_PROBLEM)
+    constant = {"d"}.__contains__
+    c = constrain_plan(d, p, DRAWER_TAIL, constant)
+    assert "q2" in c.unfit  # (and the values tied to it through the steps)
+    # what the planner would say about it
+    fd = get_planner("fd")
+    lowered = compile_problem(
+        d, None, p, caps=fd.capabilities, plan_tail=DRAWER_TAIL, is_constant=constant
+    )
+    assert fd.solve(lowered.domain, lowered.problem, time_limit=20).status == "unsolvable"
+    # the tail without its last push fits (aq0 for q2, qa for q3, ...)
+    assert constrain_plan(d, p, DRAWER_TAIL[:3], constant).unfit == ()
+    streams = parse_stream_file("(define (stream drawer))")
+    module = StreamsModule("drawer")
+    options = SolveOptions(max_level=2)
+    tied = solve(d, streams, p, module, options, ReplanState(DRAWER_TAIL, frozenset({"d"})))
+    assert tied.status == "unsolvable"
+    assert tied.stats.planner_calls == 0 and tied.stats.iterations >= 1
+    # the same problem without the tail: the planner is asked, and plans
+    free = solve(d, streams, p, module, options)
+    assert free.solved and free.stats.planner_calls == 1

@@ -75,6 +75,10 @@ class Constrained(PassResult):
     steps: dict[str, tuple[str, int]] = field(default_factory=dict)
     # free-variable object -> the value it stood for in the old plan
     free: dict[str, str] = field(default_factory=dict)
+    # the tail's values that no value of this problem fits (each in the old plan's name):
+    # their free variables' domains (:func:`free_domains`) are empty, so no plan follows the
+    # tail here and a planner need not be asked
+    unfit: tuple[str, ...] = ()
     # new action name -> per original parameter, the index of the step's parameter that
     # carries it (an int) or the constant substituted for it (a str)
     arguments: dict[str, tuple[int | str, ...]] = field(default_factory=dict)
@@ -200,7 +204,15 @@ def constrain_plan(
         init=problem.init + tuple(may) + (applied(0),),
         goal=conj(problem.goal, applied(n)),
     )
-    return Constrained(new_domain, new_problem, steps, {v: k for k, v in free.items()}, arguments)
+    unfit = tuple(old for old, v in free.items() if domains.get(v) is not None and not domains[v])
+    return Constrained(
+        new_domain,
+        new_problem,
+        steps=steps,
+        free={v: k for k, v in free.items()},
+        arguments=arguments,
+        unfit=unfit,
+    )
 
 
 def _adds(effect, bound: frozenset[str] = frozenset()):
