@@ -135,15 +135,12 @@ class KitchenStreams:
         *,
         ik_restarts: int = 6,
         max_attempts: int = 30,
-        reach_attempts: int | None = None,
         rrt_iterations: int = 300,
     ) -> None:
         self.world = world
         self.rng = rng
         self.ik_restarts = ik_restarts
         self.max_attempts = max_attempts
-        # collision-free bases one inv-reach batch tries (None: max_attempts)
-        self.reach_attempts = max_attempts if reach_attempts is None else reach_attempts
         self.rrt_iterations = rrt_iterations
         self._kin_cache: dict = {}
         # (object, grasp) -> [(base, goal arm conf)]: IK solutions found, hints for nearby bases
@@ -379,21 +376,17 @@ class KitchenStreams:
                     return False
             return True
 
-    def inv_reach(
-        self, obj: str, p: ObjPose, g: Grasp, attempts: int | None = None
-    ) -> Iterator[tuple[Conf]]:
+    def inv_reach(self, obj: str, p: ObjPose, g: Grasp) -> Iterator[tuple[Conf]]:
         """Generator stream ``inv-reach``: base confs from which ``inv-kin`` succeeds, and from
-        near which it does too (:meth:`lands`); a batch tries ``attempts`` collision-free
-        bases (default ``reach_attempts``)."""
-        attempts = self.reach_attempts if attempts is None else attempts
+        near which it does too (:meth:`lands`)."""
         target, q = multiply(self.world_pose(p), invert(g.pose))
         approach = rotate(q, (0.0, 0.0, 1.0))  # the tool's z: the way the hand moves in
         if np.hypot(approach[0], approach[1]) > 0.7:  # a side grasp
             if abs(np.arctan2(approach[1], approach[0])) > SIDE_BEARING_LIMIT:
                 return
         tried = 0  # the attempts count IK calls: a base in collision costs little
-        for _ in range(4 * attempts):
-            if tried >= attempts:
+        for _ in range(4 * self.max_attempts):
+            if tried >= self.max_attempts:
                 return
             base = self._sample_base_near(target)
             if base is None or not self.base_free(base):

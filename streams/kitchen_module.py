@@ -48,7 +48,6 @@ from .kitchen_motion import ArmConf, MotionStreams
 REFUSED_NEAR = (0.02, 0.2)
 MIN_SIDE_GRASP_HALF_HEIGHT = 0.04  # m: a side grasp of a shorter object hits its support
 PLACE_HERE_REACH = 0.85  # m from the arm's mount: placements sampled from where the robot is
-REACH_ATTEMPTS = 10  # collision-free bases one inv-reach draw tries (KitchenStreams)
 SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
 
 
@@ -60,10 +59,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         self.task = task
         self.world: World = task.world
         self.rng = rng
-        # An inv-reach batch tries REACH_ATTEMPTS bases: on Stow seed 19, 64 of the 66 bases
-        # found were found at the first to fourth base tried, and the 56 batches that found
-        # none (30 bases each) took three quarters of the stream's time.
-        self.ks = KitchenStreams(self.world, rng, reach_attempts=REACH_ATTEMPTS)
+        self.ks = KitchenStreams(self.world, rng)
         self.drawers = dict(self.world.drawer_q)  # the openings the robot saw
         self.n_objects = max(1, len(task.prior))
         self._frames = {s: self._canonical_frame(s) for s in self.world.surfaces}
@@ -180,9 +176,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         """One batch of ``inv-reach`` draws finds a base for ``g`` at ``pb``'s estimate."""
         p = self.obj_pose(pb)
         with self.planning(self._drawer_of(pb)):
-            # (a whole batch of the sampler's: a grasp reached from few bases is still found)
-            reach = self.ks.inv_reach(o, p, g, attempts=self.ks.max_attempts)
-            return next(iter(reach), None) is not None
+            return next(iter(self.ks.inv_reach(o, p, g)), None) is not None
 
     def sample_placement(self, o: str, s: str):
         for out in self._each(lambda: self.ks.sample_placements(o, s), s if s in DRAWERS else None):
