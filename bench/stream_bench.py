@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 from ssr_compile.sim.perception import visible_fraction
-from ssr_compile.sim.robot import ARM_TUCK
+from ssr_compile.sim.robot import ARM_TUCK, STALL, STALL_GAIN
 from ssr_compile.sim.samplers import KitchenStreams
 from ssr_compile.sim.world import PARK_BASE, World
 
@@ -38,6 +38,7 @@ def main(argv: list[str] | None = None) -> None:
     N = 100 if ap.parse_args(argv).full else N
     w = World()
     rng = np.random.default_rng(0)
+    w.robot.stall = (STALL, STALL_GAIN)  # IK as the planner's streams run it
     ks = KitchenStreams(w, rng)
     w.set_object("block", "counter", 1.0, 0.8, 0.0)
     w.set_object("sugar_box", "counter", 1.15, 1.05, 0.0)

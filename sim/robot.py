@@ -66,7 +66,8 @@ FINGER_OPEN = 0.04
 IK_ATTEMPTS_KEPT = 50_000
 _DAMPING = 1e-4 * np.eye(6)  # of the damped least-squares step in Robot._refine
 # An IK refinement stops after STALL steps that brought its error no lower than STALL_GAIN
-# times the best it had reached (Robot._refine)
+# times the best it had reached, when the robot's ``stall`` is on (Robot._refine; the
+# planner's streams turn it on, streams/kitchen_module.py)
 STALL = 15
 STALL_GAIN = 0.99
 
@@ -162,6 +163,8 @@ class Robot:
 
     def __init__(self, client: int, tmpdir: str | None = None) -> None:
         self.client = client
+        # the stall rule of the IK refinement, (steps, gain), or None (off; see _refine)
+        self.stall: tuple[int, float] | None = None
         self._tmp = None
         if tmpdir is None:
             self._tmp = tempfile.TemporaryDirectory(prefix="ssr_sim_")
@@ -254,7 +257,8 @@ class Robot:
     ) -> tuple[np.ndarray, float, float]:
         """Damped least-squares refinement with the Jacobian, clamped to the joint limits.
 
-        An attempt that stalls -- :data:`STALL` steps without bringing its error (the larger of
+        With :attr:`stall` on (``(STALL, STALL_GAIN)``, what the planner's streams use), an
+        attempt that stalls -- :data:`STALL` steps without bringing its error (the larger of
         the position and orientation errors, each over its tolerance) below :data:`STALL_GAIN`
         of the best so far -- stops there with the best iterate it reached.  Stalled attempts
         were four fifths of the refinement's steps (a target out of reach, or an arm held at
@@ -270,6 +274,11 @@ class Robot:
         fingers = [FINGER_OPEN, FINGER_OPEN]
         lower, upper = self.arm_lower, self.arm_upper
         best, best_at, best_conf = math.inf, 0, conf  # see STALL
+        stall_steps, stall_gain = self.stall or (iters, 0.0)
+        # without the rule: a configuration that comes back (bit for bit) starts a cycle the
+        # iterates go round until the last one, which is read off the cycle
+        seen: dict[bytes, int] | None = {} if self.stall is None else None
+        visited: list[np.ndarray] = []
         for i in range(iters):
             reached = self._ik_fk(conf)
             e_pos = np.subtract(target[0], reached[0])
@@ -283,10 +292,10 @@ class Robot:
                 break
             err_now = max(pos_err / pos_tol, ori_err / ori_tol)
             if err_now < best:
-                if err_now < best * STALL_GAIN:
+                if err_now < best * stall_gain:
                     best_at = i
                 best, best_conf = err_now, conf
-            if i - best_at >= STALL:
+            if i - best_at >= stall_steps:
                 conf = best_conf
                 break
             lin, ang = p.calculateJacobian(
@@ -296,7 +305,14 @@ class Robot:
             jac = np.ascontiguousarray(np.array(lin + ang)[:, :7])
             err = np.concatenate([e_pos, e_rot])
             step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING, err)
+            if seen is not None:
+                seen[conf.tobytes()] = i
+                visited.append(conf)
             conf = np.minimum(np.maximum(conf + step, lower), upper)  # np.clip's values
+            first = None if seen is None else seen.get(conf.tobytes())
+            if first is not None:  # configuration i + 1 is configuration ``first``
+                conf = visited[first + (iters - first) % (i + 1 - first)]
+                break
         reached = self._ik_fk(conf)
         pos_err = norm(np.subtract(reached[0], target[0]))
         return conf, pos_err, angle_between(reached[1], target[1])

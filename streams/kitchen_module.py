@@ -33,7 +33,7 @@ from ssr_compile.sim.geometry import (
     wrap_angle,
 )
 from ssr_compile.sim.problem import canonical_surface
-from ssr_compile.sim.robot import ARM_TUCK, mount_position, within_reach
+from ssr_compile.sim.robot import ARM_TUCK, STALL, STALL_GAIN, mount_position, within_reach
 from ssr_compile.sim.samplers import APPROACH, Grasp, KitchenStreams, ObjPose
 from ssr_compile.sim.tasks import Task
 from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
@@ -60,6 +60,9 @@ class KitchenModule(MotionStreams, BeliefStreams):
         self.world: World = task.world
         self.rng = rng
         self.ks = KitchenStreams(self.world, rng)
+        # IK refinements that stall stop (sim/robot.py): for planning only, the task worlds
+        # and the scripted baseline keep every IK answer as it was
+        self.world.robot.stall = (STALL, STALL_GAIN)
         self.drawers = dict(self.world.drawer_q)  # the openings the robot saw
         self.n_objects = max(1, len(task.prior))
         self._frames = {s: self._canonical_frame(s) for s in self.world.surfaces}

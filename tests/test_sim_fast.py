@@ -236,12 +236,15 @@ def test_refinement_answers_as_written_out_cycles_and_stalls_included(robots):
     for _ in range(150):
         target = pose(rng.uniform((-0.2, -0.8, 0.0), (1.0, 0.8, 1.2)), rng.normal(size=4))
         start = np.asarray(r.sample_arm(rng))
-        want, went = _refine_before(r, start, target, 2e-3, 2e-2, stall=(STALL, STALL_GAIN))
-        got = r._refine(start, target, 2e-3, 2e-2)
-        assert got[0].tobytes() == want[0].tobytes() and got[1:] == want[1:]
-        cycled += len({q.tobytes() for q in went}) < len(went)
-        solved += want[1] < 2e-3 and want[2] < 2e-2
-        stalled += len(went) < 61 and not (want[1] < 1e-3 and want[2] < 1e-2)
+        for rule in (None, (STALL, STALL_GAIN)):  # off (the default), and the planner's
+            r.stall = rule
+            want, went = _refine_before(r, start, target, 2e-3, 2e-2, stall=rule)
+            got = r._refine(start, target, 2e-3, 2e-2)
+            assert got[0].tobytes() == want[0].tobytes() and got[1:] == want[1:]
+            cycled += len({q.tobytes() for q in went}) < len(went)
+            solved += want[1] < 2e-3 and want[2] < 2e-2
+            stalled += rule is not None and len(went) < 61 and not want[1] < 1e-3
+    r.stall = None
     assert cycled > 0 and solved > 0 and stalled > 0  # each case was compared
 
 
