@@ -320,6 +320,9 @@ class _Policy:
         self.cycles: list[Cycle] = []
         self.state = ReplanState()
         self.last_level = settings.initial_level  # the level the plan in use was found at
+        # what the last planning attempt found failing over the problem's objects: the next
+        # attempt evaluates it again before it plans (ReplanState.recheck)
+        self.recheck: tuple = ()
         # failed executions: (the problem planned from, the action) -> how often
         self.failures: Counter = Counter()
 
@@ -503,6 +506,7 @@ class _Policy:
             progress=self.progress,
             accept_drawn=accept_drawn,
         )
+        state = replace(state or ReplanState(), recheck=self.recheck)
         try:
             # The solver stops itself at ``limit``; the alarm stops a stream that never
             # returns (user code) a little later.
@@ -529,6 +533,7 @@ class _Policy:
                 "timeout", None, None, [], stats,
                 message=f"time limit of {limit:g} s reached",
             )  # fmt: skip
+        self.recheck = tuple(sol.failed)
         self.planning += sol.stats.total_time
         cycle.spent[key] += sol.stats.total_time
         cycle.streams_called += sum(s.calls for s in sol.stats.streams.values())

@@ -505,3 +505,70 @@ def test_eager_streams_are_drawn_before_planning_and_a_failure_is_never_planned_
     assert events.count("kin b 9.0") == 1  # a function: one draw, then exhausted
     plans = [line for line in said if "stream plan:" in line]
     assert not any("inverse-kin(b, pb-far" in line for line in plans)
+
+
+def test_what_failed_over_the_problems_objects_is_rechecked_before_the_next_call_plans():
+    """Solution.failed names the instances over the problem's own objects that failed (a grasp
+    of a out of reach at its pose); a replanning call handed them (ReplanState.recheck)
+    evaluates them before its first planner call, and no plan of it counts on them; an
+    instance whose inputs are not the problem's objects is not called."""
+    from dataclasses import replace
+
+    from ssr_compile.compile.instantiate import Instance
+    from ssr_compile.planners import get_planner
+    from ssr_compile.solver import ReplanState
+    from ssr_compile.stream import StreamInfo
+
+    d, s, p = task("problem.pddl")
+    # a second grasp of a; the first one (ga) never reaches a at pa
+    p = replace(
+        p,
+        objects=p.objects + (S.Typed("ga2"),),
+        init=p.init + (S.Atom("grasp", (S.Const("a"), S.Const("ga2"))),),
+    )
+    bad = Instance("inverse-kin", ("a", "pa", "ga"), "stream")
+    outcome = {}
+    for recheck in ((), (bad, Instance("inverse-kin", ("zz", "pa", "ga"), "stream"))):
+        module = fresh_module()
+        module.values["ga2"] = ("g", 1e-9)  # as ga, for the kinematics
+        module.info["inverse-kin"] = StreamInfo(kind="function")
+        kin = module.streams["inverse-kin"]
+        events: list[str] = []
+
+        def one_kin(block, pose, grasp, _kin=kin, _events=events):
+            _events.append(f"kin {block} {pose} {grasp[1]}")
+            if block == "a" and grasp == ("g", 0.0):
+                return None
+            return next(_kin(block, pose, grasp))
+
+        module.streams["inverse-kin"] = one_kin
+        backend = get_planner("fd")
+        plan_once = backend.solve
+
+        def logged_solve(*a, _plan=plan_once, _events=events, **k):
+            _events.append("plan")
+            return _plan(*a, **k)
+
+        backend.solve = logged_solve
+        said: list[str] = []
+        sol = solve(
+            d, s, p, module,
+            SolveOptions(
+                initial_level=3, time_limit=30, planner=backend, progress=said.append,
+                accept_drawn=True,
+            ),
+            ReplanState(recheck=recheck),
+        )  # fmt: skip
+        outcome[bool(recheck)] = (sol, events, said)
+    (first, first_events, first_said), (again, events, said) = outcome[False], outcome[True]
+    assert first.status == again.status == "solved"
+    # the first call planned with ga, found it failing, and says so
+    assert any("inverse-kin(a, pa, ga) failed" in line for line in first_said)
+    assert bad in first.failed
+    assert all(x in {"a", "b", "pa", "pb-far", "ga", "ga2", "gb", "q0"} for i in first.failed
+               for x in i.inputs)  # fmt: skip
+    # the second evaluates it before planning, once, and never plans with it
+    assert events.index("kin a 0.3 0.0") < events.index("plan")
+    assert events.count("kin a 0.3 0.0") == 1
+    assert not any("inverse-kin(a, pa, ga)" in line for line in said if "stream plan:" in line)
+    assert bad in again.failed  # it failed again: carried on

@@ -44,6 +44,8 @@ class Evaluation:
         # draws made per generator instance, and the least complexity of each fact a result
         # of this solve certified (:meth:`complexity_of`; facts absent here have 0)
         self.draws: dict[Instance, int] = {}
+        # generator instances whose last draw found nothing
+        self.failed_draws: set[Instance] = set()
         self.fact_complexity: dict[S.Atom, int] = {}
 
     def evaluate(self, res: Result, binding: dict[str, str]) -> bool:
@@ -139,7 +141,9 @@ class Evaluation:
         if gen.exhausted:
             self.exhausted.add(inst)
         if out is None:
+            self.failed_draws.add(inst)
             return False
+        self.failed_draws.discard(inst)
         if len(out) != len(decl.outputs):
             raise StreamError(
                 f"stream '{inst.stream}' produced {len(out)} outputs, "

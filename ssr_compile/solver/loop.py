@@ -7,7 +7,7 @@ from __future__ import annotations
 import time
 
 from .. import syntax as S
-from ..compile.instantiate import Instantiation, Result
+from ..compile.instantiate import Instance, Instantiation, Result, real_instances
 from ..compile.pipeline import compile_problem
 from ..compile.predicates import optimistic_truth
 from ..compile.standins import StandIns
@@ -77,6 +77,7 @@ class SolverLoop:
             accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
         self.accept_drawn = accept_drawn
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
+        self.rechecked = False  # the last call's failures evaluated again (:meth:`recheck`)
         eager_cost = options.eager_cost
         self.eager = {
             f.name for f in streams.functions if module.info_for(f.name).cost <= eager_cost
@@ -109,7 +110,45 @@ class SolverLoop:
         )
         if self.problem.metric is not None and not self.backend.capabilities.costs:
             sol.costs_ignored_by = self.backend.name
+        sol.failed = self.failed_over_objects()
         return sol
+
+    def failed_over_objects(self) -> list[Instance]:
+        """The instances over the problem's objects alone that failed in this call: tests,
+        streams of one output at most, and generators whose last draw found nothing (what
+        the next replanning call rechecks: :meth:`recheck`)."""
+        names = {o.name for o in self.problem.objects} | {c.name for c in self.domain.constants}
+        ev, out = self.ev, []
+        for inst in sorted(ev.exhausted | set(ev.outcomes) | ev.failed_draws, key=str):
+            if not all(x in names for x in inst.inputs):
+                continue
+            if inst.kind == "test":
+                failed = ev.outcomes.get(inst) is False
+            elif self.module.info_for(inst.stream).kind == "function":
+                failed = inst in ev.exhausted and not ev.outcomes.get(inst)
+            else:
+                failed = inst in ev.failed_draws
+            if failed:
+                out.append(inst)
+        return out
+
+    def recheck(self) -> None:
+        """The instances that failed in the last replanning call (``ReplanState.recheck``),
+        evaluated again now where their domain holds, before the first plan: a failure found
+        again is never planned with.  The kitchen's Swap asked, cycle after cycle with the
+        robot where it was, to push the drawer closed from there, and each plan through that
+        push cost a planner call before its evaluation failed it again."""
+        wanted = {i for i in self.state.recheck if i.stream in self.ev.decl}
+        if not wanted:
+            return
+        tests = {i.stream for i in wanted if i.kind == "test"}
+        found = real_instances(
+            self.streams, self.problem, self.ev.results, functions=(), tests=tests,
+            streams_with_outputs={i.stream for i in wanted if i.kind == "stream"},
+        )  # fmt: skip
+        for inst in found:
+            if inst in wanted and inst not in self.ev.outcomes and inst not in self.ev.tried:
+                self.ev.evaluate_real(inst)
 
     def capped(self, e: InstanceCapReached) -> Solution:
         """The level would pass the instance cap: a resource limit, like the last level (no
@@ -125,7 +164,11 @@ class SolverLoop:
 
     def evaluate_cheap_functions(self) -> None:
         """The cheap cost functions and tests over real arguments, once per new real result
-        (a test that passes adds facts: again until none does)."""
+        (a test that passes adds facts: again until none does); the first time, the last
+        call's failures too (:meth:`recheck`)."""
+        if not self.rechecked:
+            self.rechecked = True
+            self.recheck()
         while (
             self.eager or self.eager_tests or self.eager_streams or self.streams.predicates
         ) and len(self.ev.results) != self.eager_seen:

@@ -4,12 +4,12 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Container, Sequence
+from collections.abc import Callable, Collection, Container, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from .. import syntax as S
-from ..compile.instantiate import Result
+from ..compile.instantiate import Instance, Result
 from ..errors import UnsupportedError
 from ..stream import StreamsModule, ValueTable
 
@@ -100,7 +100,9 @@ class ReplanState:
     certificate's static facts over constants only; ``kept_values``: the Python values of the
     constants those facts name that are not objects of the next problem (stream outputs such as
     grasps); ``evaluated``: real stream results kept from earlier calls; ``values``: the table
-    of the objects' names and Python values those results use (``None``: a new table).
+    of the objects' names and Python values those results use (``None``: a new table);
+    ``recheck``: stream instances over the problem's objects that failed in the last call
+    (:attr:`~.results.Solution.failed`), evaluated again before this call plans.
     """
 
     tail: Sequence[tuple[str, Sequence[str]]] | None = None
@@ -109,6 +111,7 @@ class ReplanState:
     kept_values: dict[str, Any] = field(default_factory=dict)
     evaluated: Sequence[Result] = ()
     values: ValueTable | None = None
+    recheck: Collection[Instance] = ()
 
     def is_constant(self, name: str) -> bool:
         return name in self.constants

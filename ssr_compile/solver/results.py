@@ -86,6 +86,10 @@ class Solution:
     message: str = ""
     # the planner cannot take action costs (pyperplan): it planned with unit costs
     costs_ignored_by: str | None = None
+    # instances over the problem's own objects (no drawn value) of tests and of streams of
+    # one output at most, that failed in this call: a replanning call evaluates them again
+    # before it plans (ReplanState.recheck)
+    failed: list = field(default_factory=list)
 
     @property
     def solved(self) -> bool:
