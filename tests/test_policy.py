@@ -436,3 +436,61 @@ def test_a_cycle_splits_its_planning_time_into_planner_streams_and_compilation()
     assert parts <= first.planning_time + 1e-6
     assert result.as_dict()["planner_calls"] == sum(c.planner_calls for c in result.cycles)
     assert first.as_dict()["translate_time"] == round(first.translate_time, 4)
+
+
+class _LateSightAgent(progress.ProgressAgent):
+    """Knows d graspable only from its ``sightings``-th observation on (a first estimate that
+    leaves no plan, as Swap seed 14's block 4.7 cm from where it was)."""
+
+    sightings = 3
+    seen = 0
+
+    def update(self, step, observation):
+        self.seen += 1
+        super().update(step, observation)
+
+    def problem(self):
+        from dataclasses import replace
+
+        problem, module = super().problem()
+        if self.seen < self.sightings:
+            init = tuple(f for f in problem.init if getattr(f, "pred", None) != "graspable")
+            problem = replace(problem, init=init)
+        return problem, module
+
+
+class _CountingWorld(progress.ProgressWorld):
+    observed = 0
+
+    def observe(self):
+        self.observed += 1
+        return super().observe()
+
+
+def _late_sight(max_looks: int):
+    from ssr_compile.examples import load_example
+    from ssr_compile.resources import domains_dir
+
+    ex = load_example(domains_dir() / "progress")
+    world = _CountingWorld(0)
+    episode = Episode(world, _LateSightAgent(ex.domain, ex.streams, 0), "late-sight")
+    result = run_policy(episode, PolicySettings(max_cycles=10, max_looks=max_looks))
+    return world, result
+
+
+def test_with_no_plan_the_robot_looks_again_before_it_gives_up():
+    world, result = _late_sight(2)
+    assert result.success, result.reason  # judged in the true world
+    looks = [c for c in result.cycles if c.failure and "looking again" in c.failure]
+    assert [c.index for c in looks] == [1, 2] and all(c.action is None for c in looks)
+    # the first observation and two looks, no action between (the world's execute observes
+    # once per action too)
+    assert world.observed == 3 + len(result.actions)
+    assert [a.split()[0] for a in result.actions] == ["(move-base", "(pick"]
+    for fewer in (1, 0):
+        world, result = _late_sight(fewer)
+        assert not result.success and result.reason.startswith("no plan")
+        assert world.observed == 1 + fewer
+        assert len(result.cycles) == fewer + 1 and not result.actions
+    with pytest.raises(ValueError, match="max_looks"):
+        PolicySettings(max_looks=-1)

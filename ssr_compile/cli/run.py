@@ -42,7 +42,8 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "Run one episode of the online replanning policy (paper §VI, Algorithm 1): plan, "
         "execute the first action, observe, update the belief, replan, until the goal belief "
         "is reached.  Success is judged on the environment's true state.  Exit 0 when the "
-        "goal holds in the true state at the end; 1 when the policy failed (no plan, no plan "
+        "goal holds in the true state at the end; 1 when the policy failed (no plan after "
+        "--max-looks looks again, no plan "
         "cheaper than --max-cost, budget or cycles exhausted, an action failed --max-failures "
         "times from the same state, an execute past --execute-time, or the goal does not "
         "truly hold); 2 on bad input (the example, its example.toml, the environment module "
@@ -119,6 +120,15 @@ def _configure(p: argparse.ArgumentParser) -> None:
         metavar="N",
         help="end the episode when an action failed N times from the same state (the agent's "
         "problem unchanged by the failures; default 3)",
+    )
+    p.add_argument(
+        "--max-looks",
+        type=_count,
+        default=2,
+        metavar="N",
+        help="when no plan is found, observe again without acting and replan, at most N "
+        "times in a row, before the episode ends (a first estimate can be far off; default "
+        "2; 0: end at once; never with --max-cost)",
     )
     p.add_argument(
         "--planner", metavar="NAME", help="planner backend (default fd, or example.toml's)"
@@ -234,6 +244,7 @@ def run(args: argparse.Namespace) -> int:
         max_cost=args.max_cost,
         execute_time=args.execute_time,
         max_failures=args.max_failures,
+        max_looks=args.max_looks,
         **({} if args.resample is None else {"resample": args.resample}),
     )
     from ..planners import get_planner
