@@ -564,6 +564,7 @@ def test_what_failed_over_the_problems_objects_is_rechecked_before_the_next_call
     assert first.status == again.status == "solved"
     # the first call planned with ga, found it failing, and says so
     assert any("inverse-kin(a, pa, ga) failed" in line for line in first_said)
+    assert first_events.index("plan") < first_events.index("kin a 0.3 0.0")
     assert bad in first.failed
     assert all(x in {"a", "b", "pa", "pb-far", "ga", "ga2", "gb", "q0"} for i in first.failed
                for x in i.inputs)  # fmt: skip
