@@ -457,11 +457,25 @@ def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_pa
     assert sol.stats.levels == sorted(set(sol.stats.levels))
 
 
+def _logged_fd(events: list[str]):
+    """An ``fd`` backend that appends "plan" to ``events`` at each planner call."""
+    from ssr_compile.planners import get_planner
+
+    backend = get_planner("fd")
+    plan_once = backend.solve
+
+    def logged_solve(*a, **k):
+        events.append("plan")
+        return plan_once(*a, **k)
+
+    backend.solve = logged_solve
+    return backend
+
+
 def test_eager_streams_are_drawn_before_planning_and_a_failure_is_never_planned_with():
     """StreamInfo.eager: an instance whose domain holds in the real facts is drawn before the
     first planner call; one that found nothing (b's pose out of reach) is in no stream plan;
     the plan costs what the lazy one does."""
-    from ssr_compile.planners import get_planner
     from ssr_compile.stream import StreamInfo
 
     outcome = {}
@@ -477,14 +491,7 @@ def test_eager_streams_are_drawn_before_planning_and_a_failure_is_never_planned_
             return next(_kin(block, pose, grasp))  # a function: its first answer
 
         module.streams["inverse-kin"] = logged_kin
-        backend = get_planner("fd")
-        plan_once = backend.solve
-
-        def logged_solve(*a, _plan=plan_once, _events=events, **k):
-            _events.append("plan")
-            return _plan(*a, **k)
-
-        backend.solve = logged_solve
+        backend = _logged_fd(events)
         fixture["NO_IK"].add(9.0)  # pb-far: b is never in reach (and never needed)
         said: list[str] = []
         try:
@@ -515,7 +522,6 @@ def test_what_failed_over_the_problems_objects_is_rechecked_before_the_next_call
     from dataclasses import replace
 
     from ssr_compile.compile.instantiate import Instance
-    from ssr_compile.planners import get_planner
     from ssr_compile.solver import ReplanState
     from ssr_compile.stream import StreamInfo
 
@@ -542,14 +548,7 @@ def test_what_failed_over_the_problems_objects_is_rechecked_before_the_next_call
             return next(_kin(block, pose, grasp))
 
         module.streams["inverse-kin"] = one_kin
-        backend = get_planner("fd")
-        plan_once = backend.solve
-
-        def logged_solve(*a, _plan=plan_once, _events=events, **k):
-            _events.append("plan")
-            return _plan(*a, **k)
-
-        backend.solve = logged_solve
+        backend = _logged_fd(events)
         said: list[str] = []
         sol = solve(
             d, s, p, module,
