@@ -65,15 +65,23 @@ def canonical_surface(world: World, surface: str) -> Surface:
 
 
 def prior_belief(
-    world: World, obj: str, entries: list[tuple[str, float]], rng: np.random.Generator
+    world: World,
+    obj: str,
+    entries: list[tuple[str, float]],
+    rng: np.random.Generator,
+    *,
+    n: int = PARTICLES_PER_SURFACE,
+    canonical: dict[str, Surface] | None = None,
 ) -> PoseBelief:
-    """Uniform over each prior surface (canonical frame), each surface with its prior weight."""
+    """Uniform over each prior surface (canonical frame), each surface with its prior weight;
+    ``n`` particles per surface.  ``canonical``: the surfaces already made canonical (else
+    :func:`canonical_surface` makes them, which restores the world's saved state: objects
+    placed outside its bookkeeping leave the scene)."""
     hz = world.half_extents[obj][2] + PLACE_GAP
     surfaces, labels, poses, weights = [], [], [], []
     for k, (name, w) in enumerate(entries):
-        s = canonical_surface(world, name)
+        s = canonical_surface(world, name) if canonical is None else canonical[name]
         surfaces.append(s)
-        n = PARTICLES_PER_SURFACE
         xy = s.sample_xy(rng, n)
         for x, y in xy:
             poses.append((x, y, s.z + hz, rng.uniform(-np.pi, np.pi)))

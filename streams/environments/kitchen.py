@@ -38,6 +38,7 @@ from ssr_compile.sim.problem import (
     canonical_surface,
     initial_state,
     is_localized,
+    prior_belief,
     state_problem,
     to_canonical,
     to_world,
@@ -47,8 +48,9 @@ from ssr_compile.sim.tasks import TASKS, Task, make_task
 from ssr_compile.sim.world import DRAWERS, ExecutionError, World
 
 from ssr_compile import syntax as S
+from ssr_compile.belief.lost import LostTest
 from ssr_compile.belief.observation import visibility_mask
-from ssr_compile.belief.particles import ObservationModel, PoseBelief, update
+from ssr_compile.belief.particles import ObservationModel, PoseBelief, derived_rng, update
 from ssr_compile.parse import parse_file
 from ssr_compile.policy import Episode
 from ssr_compile.resources import domains_dir
@@ -143,6 +145,11 @@ def _kitchen_files() -> tuple[S.Domain, S.StreamFile]:
     return parse_file(folder / "domain.pddl"), parse_file(folder / "stream.pddl")
 
 
+# particles per surface of the prior a lost belief is scored against and drawn from (the
+# region a box hides on the counter is a few percent of it)
+LOST_PARTICLES = 400
+
+
 class KitchenAgent:
     """The robot's side: beliefs, what it knows for certain, its own planning world."""
 
@@ -167,6 +174,8 @@ class KitchenAgent:
         self.model = MODEL if model is None else model
         self.known: KnownState | None = None
         self.placed: set[str] = set()  # objects the robot has put down (and not picked since)
+        # misses of a belief the camera saw all of, scored against the prior (belief/lost.py)
+        self.lost = LostTest()
         self.km = KitchenModule(self.task, rng)
         self.surfaces = {s: canonical_surface(world, s) for s in world.surfaces}
         self._constants = (
@@ -275,6 +284,7 @@ class KitchenAgent:
             k.held_name = step.args[2]
             k.beliefs.pop(o, None)
             self.placed.discard(o)
+            self.lost.reset(o)
         elif step.name == "pick" and not obs.ok and step.values[0] in k.beliefs:
             o = step.values[0]
             k.beliefs[o] = self._missed(k.beliefs[o])
@@ -286,6 +296,7 @@ class KitchenAgent:
             k.held, k.held_name = None, None
             k.beliefs[o] = self._placed(o, pb)
             self.placed.add(o)
+            self.lost.reset(o)
             if obs.stove_on and pb.most_likely_surface() == "stove":
                 k.cooked.add(o)
         if obs.held is None and k.held is not None and step.name != "place":
@@ -336,11 +347,28 @@ class KitchenAgent:
                 mask = visibility_mask(pbw, w.camera, w.half_extents[o], ignore=(w.objects[o],))
                 det = obs.detections.get(o)
                 post = update(pbw, det, mask, self.model, rng=self.rng)
+                if det is None:  # its own generator: the agent's draws stay as they were
+                    rng = derived_rng("lost", self.task.seed, o, pb.digest)
+                    post = self.lost.miss(
+                        pbw, mask, lambda o=o, r=rng: self._prior(o, r), self.model, rng, post
+                    )
+                else:
+                    self.lost.reset(o)
                 k.beliefs[o] = to_canonical(post, k.drawers)
         finally:
             for o in list(w.objects):
                 w.remove_object(o)
             w.set_arm(ARM_TUCK)
+
+    def _prior(self, o: str, rng: np.random.Generator) -> tuple[PoseBelief, np.ndarray]:
+        """``o``'s prior (the task's, drawn afresh) in the world frame and which of its
+        particles the camera sees now (the planning world arranged by :meth:`_look`)."""
+        k, w = self.known, self.world
+        assert k is not None
+        entries = self.task.prior[o]
+        prior = prior_belief(w, o, entries, rng, n=LOST_PARTICLES, canonical=self.surfaces)
+        prior = to_world(prior, k.drawers)
+        return prior, visibility_mask(prior, w.camera, w.half_extents[o], ignore=(w.objects[o],))
 
     def close(self) -> None:
         self.world.close()
