@@ -85,6 +85,7 @@ class StreamPlanEvaluation:
         self.position = {id(r): i for i, r in enumerate(ordered)}
         self.rejected_limit = self._rejected_limits()
         self.rejected = False  # did a test of this stream plan reject a draw?
+        self.fresh_only = False  # no earlier values bound again (see :meth:`run`)
         # the tests over real values only (no output of this stream plan) that failed
         # (FocusedLoop.test_siblings)
         self.failed_real_tests: list[Instance] = []
@@ -111,6 +112,7 @@ class StreamPlanEvaluation:
     def run(self) -> bool:
         """Evaluate the stream plan, drawing again while that is allowed; False when time ran
         out (``ok`` stays false)."""
+        passes: set[frozenset] = set()  # the bindings each pass ended with
         while True:
             outcome = self._one_pass()
             if outcome is None:
@@ -118,6 +120,24 @@ class StreamPlanEvaluation:
             all_ok, redraw = outcome
             if all_ok or not redraw:
                 break
+            state = frozenset(self.binding.items())
+            if state in passes and not self.fresh_only:
+                # A pass ended with values it ended with before: the earlier values bound
+                # again went round in a circle (two draws each rebound against the other's
+                # last value, which the check of each alone cannot see; Cook seed 20 went
+                # round for 300 s).  From here on only fresh draws, which are counted.
+                self.fresh_only = True
+                rebound = [r for r in redraw if id(r) in self.rebind]
+                self.rebind.clear()
+                redraw = [r for r in redraw if all(r is not x for x in rebound)]
+                redraw += [
+                    r
+                    for r in self._to_redraw(rebound, self.rejected_limit)
+                    if all(r is not x for x in redraw)
+                ]
+                if not redraw:
+                    break
+            passes.add(state)
             self._draw_again(redraw)
         self.ok = all_ok
         if self.rejected and not all_ok:
@@ -228,6 +248,8 @@ class StreamPlanEvaluation:
                 # one placement had many values, all in the region's middle where no partner
                 # fits, only its partner drew.)
                 for r in sorted(blamed, key=lambda r: -self._values(r)):
+                    if self.fresh_only:
+                        break
                     earlier = self._earlier_value(r, res)
                     if earlier is not None and all(r is not x for x in redraw):
                         self.rebind[id(r)] = earlier
