@@ -4,6 +4,7 @@ the online policy (Algorithm 1), and the faults the issue lists."""
 from __future__ import annotations
 
 import itertools
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -14,6 +15,21 @@ from ssr_compile.policy import Agent, Environment, PolicySettings, run_policy
 
 FAST = PolicySettings(variant="both", budget=120, constrained_time=10, unconstrained_time=60,
                       max_cycles=30)  # fmt: skip
+
+
+@contextmanager
+def _episode(task: str, seed: int):
+    ep = make_episode(task, seed)
+    try:
+        yield ep
+    finally:
+        ep.close()
+
+
+def _run(task: str, seed: int, settings: PolicySettings):
+    """One closed-loop episode: its result and its agent."""
+    with _episode(task, seed) as ep:
+        return run_policy(ep, settings), ep.agent
 
 
 def test_episode_satisfies_the_contract():
@@ -105,12 +121,8 @@ def minutes(request):
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_inspect_other_seeds(seed, minutes):
-    ep = make_episode("inspect", seed)
-    try:
-        res = run_policy(ep, FAST)
-        assert res.success, (res.reason, res.actions)
-    finally:
-        ep.close()
+    res, _ = _run("inspect", seed, FAST)
+    assert res.success, (res.reason, res.actions)
 
 
 @pytest.mark.slow
@@ -118,14 +130,10 @@ def test_stow_in_closed_loop(minutes):
     # Stow (seed 0): the sugar box in the top drawer must go out before the block goes in; the
     # robot picks and places from where its noisy base motions land, and pushes the drawer
     # closed from the arm configuration it moved to.
-    ep = make_episode("stow", 0)
-    try:
-        res = run_policy(ep, PolicySettings(variant="both", budget=600, max_cycles=60))
-        assert res.success, (res.reason, res.actions)
-        names = [a.split()[0].lstrip("(") for a in res.actions]
-        assert names.count("pick") == 2 and names.count("place") == 2 and names[-1] == "push"
-    finally:
-        ep.close()
+    res, _ = _run("stow", 0, PolicySettings(variant="both", budget=600, max_cycles=60))
+    assert res.success, (res.reason, res.actions)
+    names = [a.split()[0].lstrip("(") for a in res.actions]
+    assert names.count("pick") == 2 and names.count("place") == 2 and names[-1] == "push"
 
 
 @pytest.mark.slow
@@ -324,22 +332,18 @@ def test_a_belief_that_lost_the_block_goes_back_to_where_the_camera_cannot_see()
     # (belief/lost.py); a few of them hand the prior its mass back, where nothing was seen.
     from ssr_compile.streams.environments.kitchen import to_world
 
-    from ssr_compile.belief.observation import visibility_mask
     from ssr_compile.belief.particles import PoseBelief
 
-    ep = make_episode("cook", 17)
-    try:
+    with _episode("cook", 17) as ep:
         env, agent = ep.environment, ep.agent
         agent.update(None, env.observe())
-        k, w = agent.known, agent.world
+        k = agent.known
         true = np.array(env.world.object_pose("block")[0][:2])
         old = k.beliefs["block"]
 
         def seen(belief):
             agent._arrange()
-            pbw = to_world(belief, k.drawers)
-            return visibility_mask(pbw, w.camera, w.half_extents["block"],
-                                   ignore=(w.objects["block"],))  # fmt: skip
+            return agent._seen("block", to_world(belief, k.drawers))
 
         def unseen_mass():
             return float(k.beliefs["block"].weights[~seen(k.beliefs["block"])].sum())
@@ -362,18 +366,12 @@ def test_a_belief_that_lost_the_block_goes_back_to_where_the_camera_cannot_see()
         near = np.linalg.norm(k.beliefs["block"].poses[:, :2] - true, axis=1)
         assert near.min() < 0.05  # some particle where the block truly is
         assert unseen_mass() >= 0.5
-    finally:
-        ep.close()
 
 
 @pytest.mark.slow
 def test_cook_seed_17_looks_where_its_belief_lost_the_block(minutes):
     # the episode behind the test above: it ran 100 cycles driving to one base to look again;
     # now the belief goes back to the prior, the sugar box is moved and the block cooked
-    ep = make_episode("cook", 17)
-    try:
-        res = run_policy(ep, PolicySettings(variant="both", budget=600, max_cycles=100))
-        assert res.success, (res.reason, res.actions)
-        assert ep.agent.lost.fired >= 1
-    finally:
-        ep.close()
+    res, agent = _run("cook", 17, PolicySettings(variant="both", budget=600, max_cycles=100))
+    assert res.success, (res.reason, res.actions)
+    assert agent.lost.fired >= 1

@@ -70,11 +70,9 @@ def mix_prior(
     relabel = np.array([index[s.name] for s in prior.surfaces])
     labels = np.concatenate([belief.labels[old], relabel[prior.labels[new]]])
     poses = np.vstack([belief.poses[old], prior.poses[new]])
-    weights = np.concatenate(
+    weights = np.concatenate(  # (normalised by PoseBelief when the belief kept no particle)
         [np.full(n_old, (1.0 - mass) / max(n_old, 1)), np.full(n_new, mass / n_new)]
     )
-    if not n_old:
-        weights = np.full(n_new, 1.0 / n_new)
     return PoseBelief(belief.obj, surfaces, labels, poses, weights, belief.z_offset)
 
 

@@ -344,7 +344,7 @@ class KitchenAgent:
         try:
             for o, pb in sorted(k.beliefs.items()):
                 pbw = to_world(pb, k.drawers)
-                mask = visibility_mask(pbw, w.camera, w.half_extents[o], ignore=(w.objects[o],))
+                mask = self._seen(o, pbw)
                 det = obs.detections.get(o)
                 post = update(pbw, det, mask, self.model, rng=self.rng)
                 if det is None:  # its own generator: the agent's draws stay as they were
@@ -368,7 +368,13 @@ class KitchenAgent:
         entries = self.task.prior[o]
         prior = prior_belief(w, o, entries, rng, n=LOST_PARTICLES, canonical=self.surfaces)
         prior = to_world(prior, k.drawers)
-        return prior, visibility_mask(prior, w.camera, w.half_extents[o], ignore=(w.objects[o],))
+        return prior, self._seen(o, prior)
+
+    def _seen(self, o: str, belief: PoseBelief) -> np.ndarray:
+        """Which particles of ``o``'s ``belief`` (world frame) the camera sees in the planning
+        world as arranged now (``o`` itself hides nothing)."""
+        w = self.world
+        return visibility_mask(belief, w.camera, w.half_extents[o], ignore=(w.objects[o],))
 
     def close(self) -> None:
         self.world.close()
