@@ -1,7 +1,8 @@
-"""The README's "Writing an environment" section is a complete environment: its files are the
-shipped example ``domains/pddl/doors/`` word for word, and that folder, copied to a folder of
-the user's own, runs with ``ssr-compile run FOLDER``; and the README and ``run --help`` name
-every exit code ``run`` returns."""
+"""The README's "Writing an environment" section points to a complete environment, whose files
+docs/guide.md shows ("The doors example in full") and which are the shipped example
+``domains/pddl/doors/`` word for word; that folder, copied to a folder of the user's own, runs
+with ``ssr-compile run FOLDER``; and the README and ``run --help`` name every exit code ``run``
+returns."""
 
 from __future__ import annotations
 
@@ -17,17 +18,19 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def section(title: str) -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+def section(title: str, doc: str = "README.md") -> str:
+    text = (ROOT / doc).read_text(encoding="utf-8")
     start = text.index(f"## {title}\n")
     end = text.find("\n## ", start + 1)
     return text[start : end if end >= 0 else None]
 
 
 def readme_files() -> dict[str, str]:
-    """The section's code blocks by the file their first line names (``; domain.pddl``)."""
+    """The guide's code blocks of the example by the file their first line names
+    (``; domain.pddl``)."""
     files = {}
-    for block in re.findall(r"```\w*\n(.*?)```", section("Writing an environment"), re.S):
+    doors = section("The doors example in full", "docs/guide.md")
+    for block in re.findall(r"```\w*\n(.*?)```", doors, re.S):
         first, _, body = block.partition("\n")
         name = re.fullmatch(r"[;#] ([\w.]+)", first.strip())
         if name:
