@@ -572,3 +572,33 @@ def test_what_failed_over_the_problems_objects_is_rechecked_before_the_next_call
     assert events.count("kin a 0.3 0.0") == 1
     assert not any("inverse-kin(a, pa, ga)" in line for line in said if "stream plan:" in line)
     assert bad in again.failed  # it failed again: carried on
+
+
+@pytest.mark.parametrize("max_level", [3, 4])
+def test_a_kept_plan_is_returned_when_no_cheaper_plan_is_found(monkeypatch, max_level):
+    # A plan that held with its values drawn but cost more than planned is kept while the
+    # planner is asked for a cheaper one.  When the planner then finds none up to the last
+    # level, the kept plan is the answer, not "unsolvable" (Cook seed 23 looked again instead
+    # of acting, after 105,529 stream calls).
+    from dataclasses import replace
+
+    from ssr_compile.planners.base import UNSOLVABLE
+    from ssr_compile.solver import focused
+
+    original = focused.FocusedLoop.plan
+    refused = []
+
+    def plan(self, compiled):
+        result, bound = original(self, compiled)
+        if self.incumbent is not None:  # nothing cheaper from here on
+            refused.append(self.level)
+            result = replace(result, status=UNSOLVABLE, actions=None, cost=None)
+        return result, bound
+
+    monkeypatch.setattr(focused.FocusedLoop, "plan", plan)
+    module, sol = run("problem-blocked.pddl", max_level=max_level, progress=(said := []).append)
+    assert refused and refused[-1] == max_level  # a plan was kept, then none found to the last
+    assert sol.status == "solved", sol.message
+    assert any("the cheapest plan drawn so far" in x for x in said)
+    values, b_pose = _values_with_b(module, "problem-blocked.pddl")
+    _simulate(sol.plan, values, {"a": values["pa"], "b": values[b_pose]})
