@@ -49,6 +49,9 @@ REFUSED_NEAR = (0.02, 0.2)
 MIN_SIDE_GRASP_HALF_HEIGHT = 0.04  # m: a side grasp of a shorter object hits its support
 PLACE_HERE_REACH = 0.85  # m from the arm's mount: placements sampled from where the robot is
 SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration starts there
+# Draws of sample-placement that may land on an object the robot localized before one is
+# yielded anyway (:meth:`KitchenModule.sample_placement`).
+CLEAR_TRIES = 10
 
 
 class KitchenModule(MotionStreams, BeliefStreams):
@@ -182,10 +185,28 @@ class KitchenModule(MotionStreams, BeliefStreams):
             return next(iter(self.ks.inv_reach(o, p, g)), None) is not None
 
     def sample_placement(self, o: str, s: str):
+        """Placements of ``o`` on ``s``, each drawn clear of the objects the robot has localized
+        where it believes them (the planner's ``test-cfree``) when one of :data:`CLEAR_TRIES`
+        draws is: a crowded counter refused most placements drawn blind to them, each refusal
+        a stream plan that failed.  A placement where an object stands is still drawn after
+        that many (the plan may move the object first)."""
+        blocked = None
         for out in self._each(lambda: self.ks.sample_placements(o, s), s if s in DRAWERS else None):
             # ``None``: the sampler's attempts ran out this time (see :meth:`_each`)
             pb = None if out is None else self.belief_of(out[0])
-            yield None if pb is None or self.refused(o, pb) else (pb,)
+            if pb is None or self.refused(o, pb):
+                yield None
+                continue
+            if not self._clear(o, pb):
+                blocked = (blocked or 0) + 1
+                if blocked < CLEAR_TRIES:
+                    continue
+            blocked = None
+            yield (pb,)
+
+    def _clear(self, o: str, pb: PoseBelief) -> bool:
+        """``o`` at ``pb`` is clear of every object localized at rest (``test-cfree``)."""
+        return all(self.test_cfree(o, pb, o2, pb2) for o2, pb2 in self.obstacles.items() if o2 != o)
 
     def inv_reach(self, o: str, pb: PoseBelief, g: Grasp):
         p = self.obj_pose(pb)
@@ -273,8 +294,8 @@ class KitchenModule(MotionStreams, BeliefStreams):
                 if not self.ks.placement_valid(p):
                     continue
             pb = self.belief_of(p)
-            if self.refused(o, pb):
-                continue
+            if self.refused(o, pb) or not self._clear(o, pb):
+                continue  # (before the IK: a placement on another object is not worth it)
             path = self._kin(o, pb, g, bq)
             if path is not None:
                 found = True
