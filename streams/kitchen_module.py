@@ -190,7 +190,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         draws is: a crowded counter refused most placements drawn blind to them, each refusal
         a stream plan that failed.  A placement where an object stands is still drawn after
         that many (the plan may move the object first)."""
-        blocked = None
+        blocked = 0  # draws in a row that lay on a localized object
         for out in self._each(lambda: self.ks.sample_placements(o, s), s if s in DRAWERS else None):
             # ``None``: the sampler's attempts ran out this time (see :meth:`_each`)
             pb = None if out is None else self.belief_of(out[0])
@@ -198,10 +198,10 @@ class KitchenModule(MotionStreams, BeliefStreams):
                 yield None
                 continue
             if not self._clear(o, pb):
-                blocked = (blocked or 0) + 1
+                blocked += 1
                 if blocked < CLEAR_TRIES:
                     continue
-            blocked = None
+            blocked = 0
             yield (pb,)
 
     def _clear(self, o: str, pb: PoseBelief) -> bool:
