@@ -440,6 +440,7 @@ class _Policy:
             first_level=first,
             state=replace(state, constants=state.constants | own),
             accept_drawn=True,
+            accept_dearer=True,
         )
         if not solution.solved:
             cycle.constrained = "timeout" if solution.status == "timeout" else "fell back"
@@ -463,6 +464,7 @@ class _Policy:
         first_level: int | None = None,
         state: ReplanState | None = None,
         accept_drawn: bool | None = None,
+        accept_dearer: bool = False,
     ) -> Solution:
         """One planning attempt of at most ``limit`` seconds (``key``: "c" constrained, "u"
         unconstrained), counted in the episode's planning time and in ``cycle``."""
@@ -475,6 +477,7 @@ class _Policy:
             max_level=max_level,
             progress=self.progress,
             accept_drawn=accept_drawn,
+            accept_dearer=accept_dearer,
         )
         state = replace(state or ReplanState(), recheck=self.recheck)
         try:

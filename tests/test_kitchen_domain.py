@@ -133,14 +133,16 @@ def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheap
     # deferred (paper §VII), and the plan holds with the values drawn -- but its detection
     # costs more than planned (the observation drawn is less likely than the optimistic one).
     # It is kept, deferred motions and all, and the planner asked again; its next plan costs
-    # no less, so the kept plan is the solution, with accept_drawn or without.
+    # no less, so the kept plan is the solution, with accept_drawn or without.  With
+    # accept_dearer (the policy's plan-constrained attempts) it is the solution at once: the
+    # same plan and cost, without the planner calls that looked for a cheaper one.
     from ssr_compile.streams.kitchen_module import make_module
 
     from ssr_compile.solver import SolveOptions, solve
 
     domain, streams = files
     runs = {}
-    for accept in (True, None):
+    for accept in (True, None, "dearer"):
         task = make_task("cook", 0)
         try:
             problem, values = task_problem(task)
@@ -148,8 +150,9 @@ def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheap
             said: list[str] = []
             runs[accept] = solve(
                 domain, streams, problem, module,
-                SolveOptions(planner="fd", time_limit=120, defer=True, accept_drawn=accept,
-                             progress=said.append),
+                SolveOptions(planner="fd", time_limit=120, defer=True,
+                             accept_drawn=True if accept == "dearer" else accept,
+                             accept_dearer=accept == "dearer", progress=said.append),
             ), said  # fmt: skip
         finally:
             task.close()
@@ -169,6 +172,12 @@ def test_a_drawn_plan_with_deferred_motions_is_kept_and_taken_when_nothing_cheap
     marked = {a for s in taken.plan for a in s.deferred}
     assert marked and marked <= deferred_objects
     assert all(v is None for s in taken.plan for a, v in zip(s.args, s.values) if a in marked)
+    at_once, said = runs["dearer"]
+    assert at_once.solved and at_once.cost == pytest.approx(drawn_cost)
+    assert [(s.name, s.args) for s in at_once.plan] == [(s.name, s.args) for s in taken.plan]
+    calls = at_once.stats.planner_calls
+    assert calls < taken.stats.planner_calls and at_once.stats.levels == taken.stats.levels[:calls]
+    assert said[-1].strip().startswith(f"the plan holds with the values drawn, at {drawn_cost:g}")
 
 
 def test_focused_solves_inspect_and_the_first_action_runs(files):

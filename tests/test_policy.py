@@ -386,7 +386,8 @@ def test_a_constrained_attempt_takes_a_plan_that_holds_with_its_values_drawn(mon
 
     def spy(*args, **kw):
         options, state = args[4], args[5]
-        calls.append((state is not None and bool(state.tail), options.accept_drawn))
+        taken = (options.accept_drawn, options.accept_dearer)
+        calls.append((state is not None and bool(state.tail), taken))
         return real_solve(*args, **kw)
 
     monkeypatch.setattr(policy_module, "solve", spy)
@@ -395,8 +396,9 @@ def test_a_constrained_attempt_takes_a_plan_that_holds_with_its_values_drawn(mon
     assert result.success, result.reason
     constrained = [a for c, a in calls if c]
     unconstrained = [a for c, a in calls if not c]
-    assert constrained and all(a is True for a in constrained)
-    assert unconstrained and all(a is None for a in unconstrained)
+    # dearer than planned too: its planner could only bind the tail's free values otherwise
+    assert constrained and all(a == (True, True) for a in constrained)
+    assert unconstrained and all(a == (None, False) for a in unconstrained)
 
 
 def test_an_unconstrained_attempt_is_capped_by_the_planning_budget_left(monkeypatch):

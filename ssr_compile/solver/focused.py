@@ -347,6 +347,12 @@ class FocusedLoop(SolverLoop):
             sorted(pre.static_facts, key=str),
             deferred=[bound_result(r, mapping) for r in later],
         )
+        if dearer and self.accept_drawn and self.options.accept_dearer:
+            self.say(
+                f"  the plan holds with the values drawn, at {cost:g} (planned {planned:g})"
+                + (f", {len(later)} deferred" if later else "")
+            )
+            return drawn
         if dearer:
             # Valid, but dearer than planned (an optimistic cost was below the real one):
             # planning again may find a cheaper plan, and this one is kept meanwhile -- the
