@@ -178,6 +178,8 @@ class Robot:
         self.tool_link = self.links[TOOL_LINK]
         self.base_link = self.links["base_link"]
         self.hand_links = frozenset(self.links[n] for n in HAND_LINKS)
+        # the links rigid with the tool frame (panda_joint8 is fixed): the hand and panda_link7
+        self.wrist_links = tuple(sorted(self.hand_links | {self.links["panda_link7"]}))
         lims = [p.getJointInfo(self.body, j, physicsClientId=client)[8:10] for j in self.arm_joints]
         self.arm_lower = np.array([lo for lo, _ in lims])
         self.arm_upper = np.array([hi for _, hi in lims])

@@ -147,6 +147,7 @@ class KitchenStreams:
         self.max_attempts = max_attempts
         self.rrt_iterations = rrt_iterations
         self._kin_cache: dict = {}
+        self._hand_cache: dict = {}  # see :meth:`hand_blocked`
         # (object, grasp) -> [(base, goal arm conf)]: IK solutions found, hints for nearby bases
         self._solutions: dict[tuple[str, Grasp], list[tuple[Conf, Conf]]] = {}
         self._drawer_bases: dict[str, list[Conf]] = {}  # bases sample_drawer_base found
@@ -332,6 +333,32 @@ class KitchenStreams:
         self._kin_cache[key] = out
         return out
 
+    def hand_blocked(self, obj: str, p: ObjPose, g: Grasp) -> bool:
+        """The hand collides on the approach to ``g`` at ``p`` (:meth:`approach_path`'s tool
+        poses) from any base (:meth:`World.hand_collision`): ``inv-reach`` need try none.  In
+        Swap, the block's placements deep in a drawer or at its front wall (the hand meets the
+        cabinet) cost a failed batch of 30 IK attempts each, 0.2 s."""
+        w = self.world
+        key = (
+            obj, p, g,
+            tuple(sorted(w.support.items())),
+            tuple(sorted(w.drawer_q.items())),
+            None if w.held is None else w.held.obj,
+        )  # fmt: skip
+        found = self._hand_cache.get(key)
+        if found is None:
+            with w.saved():
+                holding = self._set_hypothesis(obj, p)
+                tool = multiply(self.world_pose(p), invert(g.pose))
+                steps = 5
+                poses = [
+                    multiply(tool, pose((0, 0, -APPROACH * (1 - k / steps))))
+                    for k in range(steps + 1)
+                ]
+                found = w.hand_collision(poses, 1, () if holding else (obj,))
+            self._hand_cache[key] = found
+        return found
+
     def _hint(self, obj: str, g: Grasp, base: Conf) -> Conf | None:
         """The goal configuration of the latest IK solution for ``obj`` and ``g`` found from a
         base within :data:`HINT_NEAR` of ``base``, if any."""
@@ -395,6 +422,8 @@ class KitchenStreams:
         if np.hypot(approach[0], approach[1]) > 0.7:  # a side grasp
             if abs(np.arctan2(approach[1], approach[0])) > SIDE_BEARING_LIMIT:
                 return
+        if self.hand_blocked(obj, p, g):
+            return
         tried = 0  # the attempts count IK calls: a base in collision costs little
         for _ in range(4 * self.max_attempts):
             if tried >= self.max_attempts:

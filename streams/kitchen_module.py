@@ -291,8 +291,8 @@ class KitchenModule(MotionStreams, BeliefStreams):
                 point = multiply(frame, p.rel)[0]
                 if np.linalg.norm(np.subtract(point, mount)) > PLACE_HERE_REACH:
                     continue
-                if not self.ks.placement_valid(p):
-                    continue
+                if not self.ks.placement_valid(p) or self.ks.hand_blocked(o, p, g):
+                    continue  # (the hand meets the world on the approach: no IK reaches it)
             pb = self.belief_of(p)
             if self.refused(o, pb) or not self._clear(o, pb):
                 continue  # (before the IK: a placement on another object is not worth it)

@@ -527,3 +527,53 @@ def test_an_arm_motion_is_checked_with_the_drawers_where_the_plan_has_them():
         assert tried == 2
     finally:
         task.close()
+
+
+def test_inv_reach_tries_no_base_where_the_hand_itself_meets_the_cabinet(monkeypatch):
+    # Swap's drawers: the block's top grasps at placements all over the open drawer.  Where the
+    # hand alone (whatever the arm) enters the cabinet on its approach, inv-reach returns at
+    # once, without an IK call; and no such placement is reached from any base by a full
+    # batch of 30 attempts.  Some placements are hand-blocked, some reached.
+    from ssr_compile.sim.samplers import ObjPose
+    from ssr_compile.sim.world import DRAWER_TRAVEL
+
+    task = make_task("swap", 0)
+    try:
+        w = task.world
+        ks = KitchenStreams(w, np.random.default_rng(0))
+        for o in list(w.objects):
+            if w.support.get(o) is not None:
+                w.remove_object(o)
+        w.set_drawer("bottom_drawer", DRAWER_TRAVEL)
+        s = w.surfaces["bottom_drawer"]
+        grasps = [g for g in ks.grasps("block") if g.kind == "top"]
+        # rel x along the drawer: 0.05-0.07 and 0.3 towards its ends, 0.2 in the middle (where
+        # Swap seed 0's placements failed and were reached)
+        pairs = [
+            (ObjPose("block", "bottom_drawer", w.rest_pose("block", "bottom_drawer", x, y, 0.0)), g)
+            for x, y in ((0.052, 0.201), (0.304, -0.027), (0.2, 0.0), (0.07, 0.025))
+            for g in grasps
+        ]
+        assert all(ks.placement_valid(p) for p, _ in pairs)
+        blocked = [(p, g) for p, g in pairs if ks.hand_blocked("block", p, g)]
+        assert blocked and len(blocked) < len(pairs)
+        iks = []
+        real_ik = w.robot.inverse_kinematics
+        monkeypatch.setattr(
+            w.robot, "inverse_kinematics", lambda *a, **k: iks.append(1) or real_ik(*a, **k)
+        )
+        for p, g in blocked:
+            assert next(iter(ks.inv_reach("block", p, g)), None) is None
+        assert not iks
+        # a full batch from bases sampled as ever: none reaches a blocked pair
+        monkeypatch.setattr(ks, "hand_blocked", lambda *a: False)
+        for p, g in blocked:
+            assert next(iter(ks.inv_reach("block", p, g)), None) is None
+        assert iks  # the batches tried bases this time
+        reached = [
+            next(iter(ks.inv_reach("block", p, g)), None) for p, g in pairs if (p, g) not in blocked
+        ]
+        assert any(r is not None for r in reached)
+        assert s.lo[0] < 0.052 and s.hi[0] > 0.304
+    finally:
+        task.close()
