@@ -8,7 +8,7 @@ seconds; the two sides run one after the other in one process, on the same pairs
 its own seeded generator, with the robot's IK attempts and the world's collision answers
 forgotten before each.
 
-Run: python bench/reach_bench.py [--placements N] [--seed S]
+Run: python bench/reach_bench.py [--full] [--placements N] [--seed S]   (--full: 50 placements)
 """
 
 from __future__ import annotations
@@ -42,9 +42,7 @@ def pairs_of(w, ks, n: int, rng) -> list[tuple[str, ObjPose, object]]:
 def run(w, pairs, seed: int, check: bool) -> dict:
     w.robot._ik_attempts.clear()  # nothing kept from the other side
     w._collisions.clear()
-    ks = KitchenStreams(w, np.random.default_rng(seed))
-    if not check:
-        ks.hand_blocked = lambda *a: False
+    ks = KitchenStreams(w, np.random.default_rng(seed), hand_check=check)
     calls = [0]
     real = w.robot.inverse_kinematics
 
@@ -73,7 +71,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--placements", type=int, default=15, help="placements per drawer (15)")
     ap.add_argument("--seed", type=int, default=0, help="seed of the placements and the bases")
     ap.add_argument("--rounds", type=int, default=2, help="times each side runs, in turn (2)")
+    ap.add_argument("--full", action="store_true", help="50 placements per drawer")
     args = ap.parse_args(argv)
+    if args.full:
+        args.placements = 50
     task = make_task("swap", 0)
     try:
         w = task.world

@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
+import pybullet as pb
 
 from .actions import DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
 from .geometry import (
@@ -42,6 +43,35 @@ BASE_RESOLUTION = (0.02, 0.02, 0.03)
 MAX_JOINT_JUMP = 0.25  # rad between consecutive IK waypoints of a Cartesian path
 #: Tool orientation facing +x with the fingers closing vertically (handles, the button).
 FACING_X = matrix_to_quat(np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], float))
+
+
+# Penetration (m) of the hand at a tool pose beyond which no IK solution's pose of it is free
+# (:func:`hand_collision`)
+HAND_DEPTH = 0.01
+
+
+def hand_collision(w: World, tools: list[Pose], ignore_from: int = 0, ignore=()) -> bool:
+    """The hand (the links rigid with the tool frame, ``panda_link7`` on) with its tool frame
+    at any of ``tools`` enters the world deeper than :data:`HAND_DEPTH`, whatever the arm and
+    the base: the robot's root is moved for the query, so that the tool is there, and put
+    back.  ``ignore``: objects the hand may touch at ``tools[ignore_from:]``.  Deeper than any
+    IK solution's error can make up for (2 mm and 0.02 rad at the tool frame), so every
+    base's approach through these tool poses collides too."""
+    r, c = w.robot, w.client
+    root = pb.getBasePositionAndOrientation(r.body, physicsClientId=c)
+    from_tool = invert(multiply(invert(pose(*root)), w.link_pose(r.body, r.tool_link)))
+    try:
+        for i, tool in enumerate(tools):
+            pos, quat = multiply(tool, from_tool)
+            pb.resetBasePositionAndOrientation(r.body, pos, quat, physicsClientId=c)
+            for body in w.obstacles(ignore if i >= ignore_from else ()):
+                for link in r.wrist_links:
+                    pts = pb.getClosestPoints(r.body, body, 0.0, linkIndexA=link, physicsClientId=c)
+                    if any(pt[8] < -HAND_DEPTH for pt in pts):
+                        return True
+        return False
+    finally:
+        pb.resetBasePositionAndOrientation(r.body, *root, physicsClientId=c)
 
 
 @dataclass(frozen=True)
@@ -137,10 +167,14 @@ class KitchenStreams:
         max_attempts: int = 30,
         rrt_iterations: int = 300,
         margin_corners: bool = True,
+        hand_check: bool = False,
     ) -> None:
         """``margin_corners``: :meth:`base_free` checks the corners of the landing margin too
-        (off: along each axis alone, as the task generator's reach check does)."""
+        (off: along each axis alone, as the task generator's reach check does).
+        ``hand_check``: :meth:`inv_reach` first asks :meth:`hand_blocked` (the planner's
+        streams; off for the task generator, whose draws make the paper's worlds)."""
         self.world = world
+        self.hand_check = hand_check
         self.margin_corners = margin_corners
         self.rng = rng
         self.ik_restarts = ik_restarts
@@ -335,7 +369,7 @@ class KitchenStreams:
 
     def hand_blocked(self, obj: str, p: ObjPose, g: Grasp) -> bool:
         """The hand collides on the approach to ``g`` at ``p`` (:meth:`approach_path`'s tool
-        poses) from any base (:meth:`World.hand_collision`): ``inv-reach`` need try none.  In
+        poses) from any base (:func:`hand_collision`): ``inv-reach`` need try none.  In
         Swap, the block's placements deep in a drawer or at its front wall (the hand meets the
         cabinet) cost a failed batch of 30 IK attempts each, 0.2 s."""
         w = self.world
@@ -355,7 +389,7 @@ class KitchenStreams:
                     multiply(tool, pose((0, 0, -APPROACH * (1 - k / steps))))
                     for k in range(steps + 1)
                 ]
-                found = w.hand_collision(poses, 1, () if holding else (obj,))
+                found = hand_collision(w, poses, 1, () if holding else (obj,))
             self._hand_cache[key] = found
         return found
 
@@ -422,7 +456,7 @@ class KitchenStreams:
         if np.hypot(approach[0], approach[1]) > 0.7:  # a side grasp
             if abs(np.arctan2(approach[1], approach[0])) > SIDE_BEARING_LIMIT:
                 return
-        if self.hand_blocked(obj, p, g):
+        if self.hand_check and self.hand_blocked(obj, p, g):
             return
         tried = 0  # the attempts count IK calls: a base in collision costs little
         for _ in range(4 * self.max_attempts):

@@ -65,9 +65,6 @@ PLACE_GAP = 1e-3  # objects rest this far above their support (no spurious conta
 # box 0.3 degrees off upright, 1.3 mm above the counter, refused 40 times in a row.
 SETTLE_TILT = 0.05
 COLLISION_TOL = 1e-4
-# Penetration (m) of the hand at a tool pose beyond which no IK solution's pose of it is free
-# (:meth:`World.hand_collision`)
-HAND_DEPTH = 0.01
 COLLISIONS_KEPT = 50_000  # robot_collision's answers kept per world (about 40 MB at most)
 
 #: The kinds of objects the world can build: half extents (x, y, z) and colour.  The sugar box
@@ -604,34 +601,6 @@ class World:
             if self._pair(hb, r.body, link_b=r.base_link):
                 return True
         return False
-
-    def hand_collision(
-        self, tools: Sequence[Pose], ignore_from: int = 0, ignore: Iterable[str] = ()
-    ) -> bool:
-        """The hand (the links rigid with the tool frame, ``panda_link7`` on) with its tool frame
-        at any of ``tools`` enters the world deeper than :data:`HAND_DEPTH`, whatever the arm
-        and the base: the robot's root is moved for the query, so that the tool is there, and
-        put back.  ``ignore``: objects the hand may touch at ``tools[ignore_from:]``.  Deeper
-        than any IK solution's error can make up for (2 mm and 0.02 rad at the tool frame),
-        so every base's approach through these tool poses collides too."""
-        r, c = self.robot, self.client
-        root = p.getBasePositionAndOrientation(r.body, physicsClientId=c)
-        to_tool = multiply(invert(pose(*root)), self.link_pose(r.body, r.tool_link))
-        from_tool = invert(to_tool)
-        try:
-            for i, tool in enumerate(tools):
-                pos, quat = multiply(tool, from_tool)
-                p.resetBasePositionAndOrientation(r.body, pos, quat, physicsClientId=c)
-                for body in self.obstacles(ignore if i >= ignore_from else ()):
-                    for link in r.wrist_links:
-                        pts = p.getClosestPoints(
-                            r.body, body, 0.0, linkIndexA=link, physicsClientId=c
-                        )
-                        if any(pt[8] < -HAND_DEPTH for pt in pts):
-                            return True
-            return False
-        finally:
-            p.resetBasePositionAndOrientation(r.body, *root, physicsClientId=c)
 
     def robot_clearances(self, reach: float, ignore: Iterable[str] = ()) -> dict[int, float]:
         """The smallest signed distance (negative: penetration) from the robot, or what it

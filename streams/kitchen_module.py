@@ -62,7 +62,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         self.task = task
         self.world: World = task.world
         self.rng = rng
-        self.ks = KitchenStreams(self.world, rng)
+        self.ks = KitchenStreams(self.world, rng, hand_check=True)
         # IK refinements that stall stop (sim/robot.py): for planning only, the task worlds
         # and the scripted baseline keep every IK answer as it was
         self.world.robot.stall = (STALL, STALL_GAIN)

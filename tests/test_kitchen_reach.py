@@ -540,7 +540,7 @@ def test_inv_reach_tries_no_base_where_the_hand_itself_meets_the_cabinet(monkeyp
     task = make_task("swap", 0)
     try:
         w = task.world
-        ks = KitchenStreams(w, np.random.default_rng(0))
+        ks = KitchenStreams(w, np.random.default_rng(0), hand_check=True)
         for o in list(w.objects):
             if w.support.get(o) is not None:
                 w.remove_object(o)
