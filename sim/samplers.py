@@ -50,6 +50,11 @@ FACING_X = matrix_to_quat(np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], float))
 HAND_DEPTH = 0.01
 
 
+def approach_poses(tool: Pose, back: float = APPROACH, steps: int = 5) -> list[Pose]:
+    """The tool poses of an approach to ``tool``: from ``back`` along its -z to ``tool``."""
+    return [multiply(tool, pose((0, 0, -back * (1 - k / steps)))) for k in range(steps + 1)]
+
+
 def hand_collision(w: World, tools: list[Pose], ignore_from: int = 0, ignore=()) -> bool:
     """The hand (the links rigid with the tool frame, ``panda_link7`` on) with its tool frame
     at any of ``tools`` enters the world deeper than :data:`HAND_DEPTH`, whatever the arm and
@@ -310,7 +315,7 @@ class KitchenStreams:
         ``seed``: the arm is there (the path starts from it); else ``hint``: a configuration
         near the goal's to start the IK from (then random restarts)."""
         w = self.world
-        poses = [multiply(tool, pose((0, 0, -back * (1 - k / steps)))) for k in range(steps + 1)]
+        poses = approach_poses(tool, back, steps)
         path = None
         if seed is not None:
             # The arm is at ``seed`` (acting from where it is): walk from the pre-pose, solved
@@ -333,19 +338,23 @@ class KitchenStreams:
                 return None
         return path
 
+    def _scene_key(self) -> tuple:
+        """What the kinematic streams' answers depend on besides their inputs: where the
+        objects rest, the drawers' openings, what the hand holds and how."""
+        w = self.world
+        return (
+            tuple(sorted(w.support.items())),
+            tuple(sorted(w.drawer_q.items())),
+            None if w.held is None else (w.held.obj, w.held.grasp),
+        )
+
     def inv_kin(
         self, obj: str, p: ObjPose, g: Grasp, base: Conf, seed: Conf | None = None
     ) -> tuple[Conf, tuple[Conf, ...]] | None:
         """Function stream ``inv-kin``: (pre-grasp arm conf, approach path) for grasping
         ``obj`` at ``p`` with ``g`` from ``base`` (or placing it there when it is held);
         ``seed``: the arm configuration to start the IK from."""
-        w = self.world
-        state = (
-            tuple(sorted(w.support.items())),
-            tuple(sorted(w.drawer_q.items())),
-            None if w.held is None else (w.held.obj, w.held.grasp),
-        )
-        key = (obj, p, g, tuple(base), state, None if seed is None else tuple(seed))
+        key = (obj, p, g, tuple(base), self._scene_key(), None if seed is None else tuple(seed))
         if key in self._kin_cache:
             return self._kin_cache[key]
         w = self.world
@@ -373,22 +382,13 @@ class KitchenStreams:
         Swap, the block's placements deep in a drawer or at its front wall (the hand meets the
         cabinet) cost a failed batch of 30 IK attempts each, 0.2 s."""
         w = self.world
-        key = (
-            obj, p, g,
-            tuple(sorted(w.support.items())),
-            tuple(sorted(w.drawer_q.items())),
-            None if w.held is None else w.held.obj,
-        )  # fmt: skip
+        key = (obj, p, g, self._scene_key())
         found = self._hand_cache.get(key)
         if found is None:
             with w.saved():
                 holding = self._set_hypothesis(obj, p)
                 tool = multiply(self.world_pose(p), invert(g.pose))
-                steps = 5
-                poses = [
-                    multiply(tool, pose((0, 0, -APPROACH * (1 - k / steps))))
-                    for k in range(steps + 1)
-                ]
+                poses = approach_poses(tool)
                 found = hand_collision(w, poses, 1, () if holding else (obj,))
             self._hand_cache[key] = found
         return found

@@ -50,10 +50,10 @@ class SolveOptions:
     to find it again).  ``None`` (default): only with a cost-optimal planner, whose optimistic
     cost bounds every plan of the level; a suboptimal one may find a cheaper plan on replanning.
     ``accept_dearer``: with ``accept_drawn``, such a plan is the solution even when it costs
-    more than planned (an optimistic cost was below the real one).  For a plan-constrained
-    attempt (the policy's), whose planner can only bind the tail's free values otherwise: a
-    kitchen replan's second planner call found the same plan again in 8 of the 10 constrained
-    attempts of Cook seed 4 where it was asked.
+    more than planned (an optimistic cost was below the real one; the Focused loop).  For a
+    plan-constrained attempt (the policy's), whose planner can only bind the tail's free
+    values otherwise: a kitchen replan's second planner call found the same plan again in 8
+    of the 10 constrained attempts of Cook seed 4 where it was asked.
     ``share``: instances with optimistic inputs share their optimistic outputs (see
     :func:`~ssr_compile.compile.instantiate.instantiate`): smaller first optimistic problems,
     but more real values later (each consumer is evaluated for every value bound to a shared
