@@ -157,6 +157,9 @@ class PolicySettings:
     # level cut-off proves nothing (each level retries the samplers that found nothing).
     # Cook seed 1 gave up at level 8 after 40 s of its 600 s budget.
     unconstrained_max_level: int = 12
+    # Of a constrained attempt: level rises over a saturated problem (they only draw again
+    # what failed) before it falls back to the unconstrained attempt (``retry_levels``).
+    constrained_retry_levels: int | None = 3
     max_cost: float = math.inf  # c*: plans must be cheaper; none is: the episode ends
     # Of each ``execute`` (and ``observe``, ``goal_holds``): past it the episode ends.
     execute_time: float = 60.0
@@ -194,6 +197,10 @@ class PolicySettings:
             raise ValueError(f"resample must be 0 or more, got {self.resample}")
         if self.max_looks < 0:
             raise ValueError(f"max_looks must be 0 or more, got {self.max_looks}")
+        if self.constrained_retry_levels is not None and self.constrained_retry_levels < 0:
+            raise ValueError(
+                f"constrained_retry_levels must be 0 or more, got {self.constrained_retry_levels}"
+            )
 
     @property
     def constraints(self) -> bool:
@@ -441,6 +448,7 @@ class _Policy:
             state=replace(state, constants=state.constants | own),
             accept_drawn=True,
             accept_dearer=True,
+            retry_levels=settings.constrained_retry_levels,
         )
         if not solution.solved:
             cycle.constrained = "timeout" if solution.status == "timeout" else "fell back"
@@ -465,6 +473,7 @@ class _Policy:
         state: ReplanState | None = None,
         accept_drawn: bool | None = None,
         accept_dearer: bool = False,
+        retry_levels: int | None = None,
     ) -> Solution:
         """One planning attempt of at most ``limit`` seconds (``key``: "c" constrained, "u"
         unconstrained), counted in the episode's planning time and in ``cycle``."""
@@ -478,6 +487,7 @@ class _Policy:
             progress=self.progress,
             accept_drawn=accept_drawn,
             accept_dearer=accept_dearer,
+            retry_levels=retry_levels,
         )
         state = replace(state or ReplanState(), recheck=self.recheck)
         try:

@@ -602,3 +602,24 @@ def test_a_kept_plan_is_returned_when_no_cheaper_plan_is_found(monkeypatch, max_
     assert any("the cheapest plan drawn so far" in x for x in said)
     values, b_pose = _values_with_b(module, "problem-blocked.pddl")
     _simulate(sol.plan, values, {"a": values["pa"], "b": values[b_pose]})
+
+
+def test_retry_levels_bounds_the_level_rises_that_only_draw_again_what_failed():
+    # Every placement in the goal region collides: once instantiation is saturated, each
+    # level rise only gives back the failed samples to be drawn again.  ``retry_levels`` caps
+    # those rises (the policy's constrained attempts, which have a fallback); unbounded, the
+    # loop climbs until the planner proves the problem unsolvable with nothing held back.
+    levels = {}
+    for retries in (None, 0, 1):
+        module = fresh_module()
+        module.module.REGIONS = {"table": (5.2, 5.2), "goal": (4.9, 5.1)}
+        _, sol = run(module=module, max_level=6, time_limit=20, retry_levels=retries)
+        assert sol.status == "unsolvable" and sol.plan is None
+        levels[retries] = sol.stats.levels
+        if retries is not None:
+            assert f"retry_levels={retries}" in sol.message
+    first = levels[0][0]
+    assert set(levels[0]) == {first}  # no rise at all
+    assert set(levels[1]) == {first, first + 1}  # one rise
+    assert max(levels[None]) > first + 1
+    assert levels[None][: len(levels[1])] == levels[1]  # the same iterations until the cap

@@ -63,6 +63,10 @@ class FocusedLoop(SolverLoop):
         # kept when not taken at once (``accept_drawn`` off): see :meth:`use_plan`
         self.incumbent: Solution | None = None
         self.since_incumbent = 0  # see IMPROVEMENTS
+        # was the last problem compiled saturated (no higher level adds a stream instance),
+        # and how many level rises gave back only held-back instances (``retry_levels``)?
+        self.last_saturated = False
+        self.retries = 0
 
     def visible_results(self) -> list[Result]:
         """The real results whose complexity is at most the level, and those inherited from
@@ -117,6 +121,8 @@ class FocusedLoop(SolverLoop):
                         "unsolvable", f"level {self.level} would pass the cap ({e.message})"
                     )
                 return self.capped(e)
+            inst = compiled.instantiation
+            self.last_saturated = inst is not None and inst.saturated
             result, bound = self.plan(compiled)
             if result.status == "error":
                 raise PlannerFailure(self.backend.name, result.message, detail=result.detail)
@@ -215,7 +221,8 @@ class FocusedLoop(SolverLoop):
 
     def raise_level(self, result, bound) -> Solution | None:
         """No plan at this level: the next level (failed instances may be retried there), or
-        "unsolvable" after the last."""
+        "unsolvable" after the last -- or sooner, when the problem was saturated and the
+        rises that only draw again what failed are used up (``retry_levels``)."""
         if result.message:
             self.best_failure = result.message
         if self.level >= self.max_level:
@@ -226,6 +233,19 @@ class FocusedLoop(SolverLoop):
                 message=f"no plan found {why}up to level {self.max_level} in {took:.1f} s "
                 f"({self.best_failure})",
             )
+        limit = self.options.retry_levels
+        if self.last_saturated and limit is not None:
+            if self.retries >= limit:
+                took = time.monotonic() - self.start
+                return self.incumbent_or(
+                    "unsolvable",
+                    message=f"no plan at level {self.level} in {took:.1f} s (a higher level "
+                    "adds no stream instance and would only draw again what failed; "
+                    f"retry_levels={limit})",
+                )
+            self.retries += 1
+        if self.last_saturated:
+            self.say(f"  level {self.level + 1} adds no stream instance: it draws again what failed")
         self.level += 1
         self.ev.tried.clear()
         self.draws.given_back.clear()
