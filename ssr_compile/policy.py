@@ -465,32 +465,26 @@ class _Policy:
     ) -> Solution:
         """PLAN without the tail: from ``resume_below`` levels below the level the last plan
         was found at (a problem at a level holds every instance of the levels below it; one
-        below, so that the level can come down again as the task nears its end); when that
-        finds no plan (a level past the instance cap, say), once more from the first level.
-        Each level below was a planner call on a problem no plan fitted: Cook seed 0's
-        replans after a constrained attempt fell back spent levels 1-4 so, "0 ground actions"
-        each (4-6 % of the planner's time in an episode)."""
+        below, so that the level can come down again as the task nears its end), up to the
+        same last level as from the first.  Each level below was a planner call on a problem
+        no plan fitted: Cook seed 0's replans after a constrained attempt fell back spent
+        levels 1-4 so, "0 ground actions" each.  When the level it starts at is already past
+        the instance cap, once more from the first level."""
         settings = self.settings
         limit = min(settings.unconstrained_time, remaining)
+        last = settings.unconstrained_max_level
         first = settings.initial_level
         if settings.resume_below is not None:
-            below = self.last_level - settings.resume_below
-            first = max(first, min(below, settings.unconstrained_max_level))
-        levels = settings.unconstrained_max_level + first - settings.initial_level
-        solution = self.attempt(cycle, problem, module, limit, "u", levels, first_level=first)
-        if solution.solved or first == settings.initial_level or solution.status == "timeout":
+            first = max(first, min(self.last_level - settings.resume_below, last))
+        solution = self.attempt(cycle, problem, module, limit, "u", last, first_level=first)
+        capped_at_once = solution.status == "unsolvable" and not solution.stats.levels
+        if first == settings.initial_level or not capped_at_once:
             return solution
         remaining = settings.budget - self.planning
         if remaining <= 0:
             return solution
-        return self.attempt(
-            cycle,
-            problem,
-            module,
-            min(settings.unconstrained_time, remaining),
-            "u",
-            settings.unconstrained_max_level,
-        )
+        limit = min(settings.unconstrained_time, remaining)
+        return self.attempt(cycle, problem, module, limit, "u", last)
 
     def attempt(
         self,
@@ -529,8 +523,9 @@ class _Policy:
         except InstanceCapReached as e:
             if first == settings.initial_level:
                 raise
-            # A constrained attempt started at the last plan's level: passing the cap
-            # there is no plan of this attempt (the unconstrained one starts low).
+            # An attempt started above the first level (at or below the last plan's):
+            # passing the cap there is no plan of this attempt; an unconstrained one then
+            # starts again from the first level (:meth:`unconstrained_attempt`).
             stats = Statistics(total_time=time.monotonic() - began)
             sol = Solution("unsolvable", None, None, [], stats, message=e.message)
         except TimeLimitReached as e:

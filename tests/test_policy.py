@@ -69,6 +69,69 @@ def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
         assert constrained[0] == first[-1], seed  # not level 1 again
 
 
+def _attempt_levels(said: list[str]) -> list[list[int]]:
+    """The levels of each solve's iterations, from the solver's progress lines."""
+    import re
+
+    attempts: list[list[int]] = []
+    for x in said:
+        m = re.match(r"iteration (\d+): level (\d+)", x)
+        if m:
+            if m.group(1) == "1":
+                attempts.append([])
+            attempts[-1].append(int(m.group(2)))
+    return attempts
+
+
+def test_an_unconstrained_attempt_starts_one_level_below_the_last_plan():
+    # Without plan constraints every cycle is an unconstrained attempt: each starts one level
+    # below the level the last plan was found at (resume_below=1), not at level 1 again;
+    # with resume_below=None, every attempt starts at the first level.
+    resumed = 0
+    for seed in SEEDS:
+        for below in (1, None):
+            said: list[str] = []
+            episode = progress.make_episode(None, seed)
+            settings = PolicySettings(variant="neither", max_cycles=25, resume_below=below)
+            result = run_policy(episode, settings, progress=said.append)
+            assert result.success, (seed, below, result.reason)
+            attempts = _attempt_levels(said)
+            assert len(attempts) == len(result.cycles), (seed, below)  # one solve per cycle
+            assert attempts[0][0] == 1
+            for last, this in zip(attempts, attempts[1:]):
+                expected = 1 if below is None else max(1, last[-1] - below)
+                assert this[0] == expected, (seed, below, attempts)
+                resumed += below is not None and expected > 1
+    assert resumed > 0  # some attempt did start above the first level
+
+
+def test_an_unconstrained_attempt_past_the_instance_cap_where_it_starts_starts_again_low(
+    monkeypatch,
+):
+    # An attempt resumed above the first level whose first problem already passes the cap
+    # has found nothing: the cycle plans again from the first level, and the episode goes on.
+    import ssr_compile.policy as policy_module
+    from ssr_compile.errors import InstanceCapReached
+
+    real_solve, firsts = policy_module.solve, []
+
+    def capped_above_one(domain, streams, problem, module, options, state=None):
+        firsts.append(options.initial_level)
+        if options.initial_level > 1:
+            raise InstanceCapReached("optimistic instantiation made more than 5 instances")
+        return real_solve(domain, streams, problem, module, options, state)
+
+    monkeypatch.setattr(policy_module, "solve", capped_above_one)
+    episode = progress.make_episode(None, 0)
+    settings = PolicySettings(variant="neither", max_cycles=25, resume_below=0)
+    result = run_policy(episode, settings)
+    assert result.success, result.reason
+    resumed = [i for i, level in enumerate(firsts) if level > 1]
+    assert resumed  # the attempts after the first did start above level 1
+    assert all(firsts[i + 1] == 1 for i in resumed)  # and each started again at level 1
+    assert len(firsts) == len(result.cycles) + len(resumed)
+
+
 def test_without_plan_constraints_replanning_moves_the_base_again_and_again():
     motions = {}
     for seed in SEEDS:
