@@ -19,8 +19,9 @@ import argparse
 import statistics
 import time
 
+from ssr_compile.catalog import VARIANTS
 from ssr_compile.examples import load_example
-from ssr_compile.policy import VARIANTS, PolicySettings, run_policy
+from ssr_compile.policy import PolicySettings, run_policy
 
 
 def episode_for(env: str, seed: int):

@@ -245,7 +245,9 @@ class FocusedLoop(SolverLoop):
                 )
             self.retries += 1
         if self.last_saturated:
-            self.say(f"  level {self.level + 1} adds no stream instance: it draws again what failed")
+            self.say(
+                f"  level {self.level + 1} adds no stream instance: it draws again what failed"
+            )
         self.level += 1
         self.ev.tried.clear()
         self.draws.given_back.clear()
