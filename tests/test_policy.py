@@ -46,33 +46,8 @@ def test_with_plan_constraints_the_robot_moves_its_base_once_and_picks():
         assert result.cycles[1].constrained == "held"
 
 
-def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
-    # The tail's instances are no deeper than when its plan was found: the levels below are
-    # planner calls on a problem that cannot hold it (Swap: levels 1-4 of every attempt).
-    import re
-
-    for seed in SEEDS:
-        said: list[str] = []
-        episode = progress.make_episode(None, seed)
-        result = run_policy(episode, PolicySettings(max_cycles=25), progress=said.append)
-        assert result.cycles[1].constrained == "held", seed
-        attempts: list[list[int]] = []  # the levels of each solve's iterations
-        for x in said:
-            m = re.match(r"iteration (\d+): level (\d+)", x)
-            if m:
-                if m.group(1) == "1":
-                    attempts.append([])
-                attempts[-1].append(int(m.group(2)))
-        assert len(attempts) == 3  # the first plan, the constrained attempt, the empty plan
-        first, constrained, _ = attempts
-        assert first[0] == 1 and first[-1] > 1, seed
-        assert constrained[0] == first[-1], seed  # not level 1 again
-
-
 def _attempt_levels(said: list[str]) -> list[list[int]]:
     """The levels of each solve's iterations, from the solver's progress lines."""
-    import re
-
     attempts: list[list[int]] = []
     for x in said:
         m = re.match(r"iteration (\d+): level (\d+)", x)
@@ -81,6 +56,21 @@ def _attempt_levels(said: list[str]) -> list[list[int]]:
                 attempts.append([])
             attempts[-1].append(int(m.group(2)))
     return attempts
+
+
+def test_a_constrained_attempt_starts_at_the_level_the_last_plan_was_found_at():
+    # The tail's instances are no deeper than when its plan was found: the levels below are
+    # planner calls on a problem that cannot hold it (Swap: levels 1-4 of every attempt).
+    for seed in SEEDS:
+        said: list[str] = []
+        episode = progress.make_episode(None, seed)
+        result = run_policy(episode, PolicySettings(max_cycles=25), progress=said.append)
+        assert result.cycles[1].constrained == "held", seed
+        attempts = _attempt_levels(said)
+        assert len(attempts) == 3  # the first plan, the constrained attempt, the empty plan
+        first, constrained, _ = attempts
+        assert first[0] == 1 and first[-1] > 1, seed
+        assert constrained[0] == first[-1], seed  # not level 1 again
 
 
 def test_an_unconstrained_attempt_starts_one_level_below_the_last_plan():
