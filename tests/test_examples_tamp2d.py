@@ -403,30 +403,37 @@ def test_solver_with_deferred_motions_gives_a_plan_the_checker_accepts():
     assert all(name == "move" for name, args in plan if set(args) & deferred)
 
 
-def test_the_example_settings_solve_the_blocked_problem_with_the_adaptive_algorithm(capsys):
-    """tamp2d's example.toml picks the adaptive algorithm: the blocked problem's plan then
-    costs 29.50 (seed 0), where the Focused loop's costs 30.30; both move the blocker first,
-    and the adaptive plan simulates on the geometry at the cost reported."""
+def test_the_example_settings_draw_the_kept_plan_again_for_a_cheaper_binding(capsys):
+    """tamp2d's example.toml names no algorithm: the Focused loop with its cost-optimal planner
+    draws the stream plan of the plan it kept (held, dearer than planned) again before it
+    answers.  On the blocked problem, seed 1, the answer was the first free table placement
+    drawn for the blocker (35.919); the kept plan's second draw costs 29.670.  Both move the
+    blocker first, and the plan simulates on the geometry at the cost reported."""
     import json
 
     from ssr_compile.cli import main
     from ssr_compile.solver import SolveOptions, solve
 
-    costs = {}
-    for extra in ([], ["--algorithm", "focused"]):
-        assert main(["solve", "tamp2d", "--problem", "blocked", "--json", *extra]) == 0
-        out = json.loads(capsys.readouterr().out)
-        result = out["results"][0]
+    out = {}
+    for extra in ([], ["--algorithm", "adaptive"]):
+        assert (
+            main(["solve", "tamp2d", "--problem", "blocked", "--seed", "1", "--json", *extra]) == 0
+        )
+        doc = json.loads(capsys.readouterr().out)
+        result = doc["results"][0]
         picks = [s["args"][0] for s in result["plan"] if s["action"] == "pick"]
         assert picks == ["b1", "b0"]
-        costs[out["settings"]["algorithm"]["value"]] = result["cost"]
-    assert costs == pytest.approx({"adaptive": 29.503, "focused": 30.303}, abs=1e-3)
-    # the same solve in-process, its plan checked on the geometry
+        out[doc["settings"]["algorithm"]["value"]] = result["cost"]
+    assert out == pytest.approx({"focused": 29.670, "adaptive": 30.470}, abs=1e-3)
     domain = parse_file(TAMP2D / "domain.pddl")
     problem = parse_file(TAMP2D / "problem-blocked.pddl")
     streams = parse_file(TAMP2D / "stream.pddl")
-    sol = solve(domain, streams, problem, T.make_module(0),
-                SolveOptions(planner="fd:opt", initial_level=3, algorithm="adaptive"))  # fmt: skip
-    assert sol.solved
-    steps = [(s.name, s.values) for s in sol.plan]
-    assert T.check_plan(domain, problem, None, steps) == pytest.approx(29.503, abs=1e-3)
+    costs = {}
+    for rebind in (None, 0):
+        sol = solve(domain, streams, problem, T.make_module(1),
+                    SolveOptions(planner="fd:opt", initial_level=3, rebind=rebind))  # fmt: skip
+        assert sol.solved
+        steps = [(s.name, s.values) for s in sol.plan]
+        costs[rebind] = T.check_plan(domain, problem, None, steps)
+        assert costs[rebind] == pytest.approx(sol.cost, abs=1e-6)
+    assert costs == pytest.approx({None: 29.670, 0: 35.919}, abs=1e-3)
