@@ -98,32 +98,47 @@ def test_leaf_tests_are_the_tests_no_domain_reads():
     assert inst_mod.leaf_tests(streams, streams.streams) == frozenset()
 
 
+def test_leaf_streams_are_the_generators_no_domain_reads_either():
+    """A generator whose certified facts no stream, rule or function domain reads (its
+    outputs are typed only by them, so no stream takes one as an input) is a leaf stream:
+    tamp2d's motion, the kitchen's base motion (one per pair of base configurations); not a
+    generator whose output another stream reads (the kitchen's inv-kin, tamp2d's ik)."""
+    ex = load_example("tamp2d")
+    assert inst_mod.leaf_streams(ex.streams, ex.streams.streams) == {"test-cfree", "motion"}
+    kitchen = load_example("kitchen")
+    leaves = inst_mod.leaf_streams(kitchen.streams, kitchen.streams.streams)
+    assert "plan-base-motion" in leaves
+    assert "inv-kin" not in leaves and "sample-placement" not in leaves
+
+
 def test_pairwise_tests_do_not_count_against_the_instance_cap(monkeypatch):
-    # 3 blocks, 2 regions, level 2: 19 instances that make objects (6 placements, 3 grasps,
-    # 9 ik, 1 motion) and 54 test-cfree instances: the pairs of the 9 poses (3 a block) of two
-    # different blocks (Unsafe reads CFree only with (not (= ?b ?b2)))
+    # 3 blocks, 2 regions, level 2: 18 instances whose objects or facts streams join over (6
+    # placements, 3 grasps, 9 ik), 1 motion (a leaf stream: its trajectory only actions read)
+    # and 54 test-cfree instances: the pairs of the 9 poses (3 a block) of two different
+    # blocks (Unsafe reads CFree only with (not (= ?b ?b2)))
     problem = _blocks(3)
     counts = _tamp2d_counts(problem, 2)
     assert counts == {"sample-placement": 6, "sample-grasp": 3, "ik": 9, "motion": 1,
                       "test-cfree": 54}  # fmt: skip
     ex = load_example("tamp2d")
-    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 19)
+    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 18)
     out = inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
     assert len(out.results) == 73
-    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 18)
-    with pytest.raises(UnsupportedError, match=r"more than 18 stream instances at level 2.*ik 9"):
+    monkeypatch.setattr(inst_mod, "MAX_INSTANCES", 17)
+    with pytest.raises(UnsupportedError, match=r"more than 17 stream instances at level 2.*ik 9"):
         inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
 
 
 def test_leaf_tests_have_a_cap_of_their_own(monkeypatch):
     ex = load_example("tamp2d")
     problem = _blocks(3)
-    monkeypatch.setattr(inst_mod, "MAX_LEAF_TESTS", 54)
+    monkeypatch.setattr(inst_mod, "MAX_LEAF_TESTS", 55)
     assert len(inst_mod.instantiate(ex.domain, ex.streams, problem, level=2).results) == 73
-    monkeypatch.setattr(inst_mod, "MAX_LEAF_TESTS", 53)
+    monkeypatch.setattr(inst_mod, "MAX_LEAF_TESTS", 54)
     with pytest.raises(
         UnsupportedError,
-        match=r"more than 53 instances of tests no stream domain uses at level 2;.*test-cfree 54",
+        match=r"more than 54 instances of tests and streams no stream domain uses at level 2;"
+        r".*test-cfree 54, motion 1",
     ):
         inst_mod.instantiate(ex.domain, ex.streams, problem, level=2)
 

@@ -37,12 +37,15 @@ DEFAULT_FUNCTION_VALUE = 1.0
 # Safety cap on the stream instances of one compilation that make objects or certify facts
 # some stream, rule or function domain joins over: their chains are what grows level by level.
 MAX_INSTANCES = 20000
-# Cap on the instances of *leaf tests* (:func:`leaf_tests`): each adds one fact, makes no object
-# and enables no other instance, so they are counted apart (pddlstream gives tests no
-# complexity).  Pairwise tests grow with the square of the beliefs: issue 40's kitchen of 8
-# objects has 22,921 instances at level 4, 19,691 of them leaf tests (test-cfree 9,292,
-# test-afree 7,492, test-vis 1,900, test-vis-robot 1,007) and 3,230 others (2,809 base motions);
-# 100,000 leaf tests take some 175 MiB (tamp2d, 316 blocks, level 1: 99,540 test-cfree).
+# Cap on the instances of *leaf tests* (:func:`leaf_tests`) and *leaf streams*
+# (:func:`leaf_streams`): each adds facts (and objects) only actions read and enables no other
+# instance, so they are counted apart (pddlstream gives tests no complexity).  Pairwise tests
+# grow with the square of the beliefs: issue 40's kitchen of 8 objects has 22,921 instances at
+# level 4, 19,691 of them leaf tests (test-cfree 9,292, test-afree 7,492, test-vis 1,900,
+# test-vis-robot 1,007); 100,000 leaf tests take some 175 MiB (tamp2d, 316 blocks, level 1:
+# 99,540 test-cfree).  The base motions, one per pair of base configurations, are leaf
+# streams: counted with the others, they alone passed MAX_INSTANCES as the level climbed
+# (19,456 of them when N = 8, seed 0 ended at the cap).
 MAX_LEAF_TESTS = 100000
 
 
@@ -232,6 +235,8 @@ def instantiate(
     leaves = leaf_tests(streams, [s for s, kind in schemas if kind == "test"])
     # leaf tests' instances whose facts the domain never reads (pairs of an object with itself)
     apart = distinct_inputs(domain, problem, [s for s, _k in schemas if s.name in leaves])
+    # counted against MAX_LEAF_TESTS: the leaf tests and the generators no domain joins over
+    leaves |= leaf_streams(streams, [s for s, kind in schemas if kind == "stream"])
 
     def unread(stream, binding) -> bool:
         return any(binding[a] == binding[b] for a, b in apart.get(stream.name, ()))
@@ -265,8 +270,8 @@ def instantiate(
                 if made_leaves > MAX_LEAF_TESTS:
                     raise InstanceCapReached(
                         f"optimistic instantiation made more than {MAX_LEAF_TESTS} instances "
-                        f"of tests no stream domain uses at level {depth}; lower the level or "
-                        f"restrict the tests' domains{_most(counts, leaves, True)}"
+                        f"of tests and streams no stream domain uses at level {depth}; lower "
+                        f"the level or restrict their domains{_most(counts, leaves, True)}"
                     )
                 key = tuple(position[f] for f in dom_facts)
                 found.append((key, (stream, inst, binding, dom_facts, inst_level)))
@@ -378,15 +383,22 @@ def leaf_tests(streams: S.StreamFile, tests: Iterable[S.Stream]) -> frozenset[st
     """The names of the ``tests`` (streams without outputs) whose certified predicates no
     stream, stream predicate, rule or function domain of ``streams`` mentions: their instances
     add facts only the actions and axioms read, and never enable another instance."""
+    return leaf_streams(streams, [t for t in tests if not t.outputs])
+
+
+def leaf_streams(streams: S.StreamFile, candidates: Iterable[S.Stream]) -> frozenset[str]:
+    """The names of the ``candidates`` whose certified predicates no stream, stream
+    predicate, rule or function domain of ``streams`` mentions, outputs or not: their
+    instances never enable another instance (an output is only ever typed by those
+    predicates, so no stream takes it as an input).  A generator among them makes objects
+    only actions read: the kitchen's base motions, one per pair of base configurations."""
     used = {
         a.pred
         for block in (*streams.streams, *streams.predicates, *streams.rules, *streams.functions)
         for a in atoms(block.domain)
     }
     return frozenset(
-        t.name
-        for t in tests
-        if not t.outputs and not any(a.pred in used for a in atoms(t.certified))
+        t.name for t in candidates if not any(a.pred in used for a in atoms(t.certified))
     )
 
 
