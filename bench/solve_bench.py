@@ -119,12 +119,14 @@ def run_once(
         p,
         module,
         SolveOptions(
-            planner=backend,
-            time_limit=time_limit,
-            defer=defer,
-            initial_level=int(config.get("level", 1)),
-            max_level=int(config.get("max_level", 8)),
-            **options,
+            **{
+                "planner": backend,
+                "time_limit": time_limit,
+                "defer": defer,
+                "initial_level": int(config.get("level", 1)),
+                "max_level": int(config.get("max_level", 8)),
+                **options,  # --option wins over the example's settings
+            }
         ),
     )
     elapsed = time.perf_counter() - start
@@ -193,7 +195,8 @@ def main() -> None:
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="a keyword of the solver, e.g. --option share=1 --option eager_tests=0",
+        help="a keyword of the solver, e.g. --option share=1 --option eager_tests=0; it wins "
+        "over the example.toml setting of the same name (--option initial_level=1)",
     )
     ap.add_argument(
         "--planner",
