@@ -86,6 +86,9 @@ class KitchenModule(MotionStreams, BeliefStreams):
         # moved to for one of them takes it again: solved anew from there, the redundant arm's
         # IK may not find a path that starts there, and the robot went back and forth)
         self._drawer_motions: list = []
+        # press paths planned so far, by base and drawer openings (see
+        # :meth:`~streams.kitchen_motion.KitchenMotion._press`)
+        self._press_paths: list = []
         # the drawer openings each reach configuration was computed under (see
         # :meth:`_openings_at`), by its joint values
         self._reach_openings: dict[tuple, dict[str, float]] = {}

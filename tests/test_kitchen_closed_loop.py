@@ -254,6 +254,40 @@ def test_a_drawer_motion_starts_from_the_arm_configuration_planned_for_it():
         ep.close()
 
 
+def test_a_press_starts_from_the_arm_configuration_planned_for_it(monkeypatch):
+    # The clutter family's N = 4, K = 1, seed 5: after moving the arm to the press's approach,
+    # the press solved anew from there found no path starting there, so every replan moved
+    # the arm to where it already was (a motion of length zero) for 83 cycles.  The press
+    # path planned for that approach is taken again when no other starts there.
+    ep = make_episode("cook", 0)
+    try:
+        km = ep.agent.km
+        for (bq,) in filter(None, itertools.islice(km.sample_press_base("stove"), 3)):
+            here = km.plan_press(bq)
+            if here is None:
+                continue
+            aq, path = here
+            # no path from where the arm is (as the redundant arm's IK found there)
+            real = km.ks.plan_press
+
+            def not_from_a_seed(b, seed=None, real=real):
+                return None if seed is not None else real(b)
+
+            monkeypatch.setattr(km.ks, "plan_press", not_from_a_seed)
+            after = km.plan_press_from(bq, tuple(aq))
+            assert after is not None and tuple(after[0]) == tuple(path)
+            # from anywhere else, no path is made up
+            assert km.plan_press_from(bq, tuple(v + 0.5 for v in aq)) is None
+            # nor from the same arm configuration at another base
+            other = (bq[0] + 0.3, bq[1], bq[2])
+            assert km.plan_press_from(other, tuple(aq)) is None
+            break
+        else:
+            pytest.fail("no press planned from three press bases")
+    finally:
+        ep.close()
+
+
 def test_a_sampler_out_of_attempts_is_not_exhausted():
     # A kitchen sampler that used up its attempts without a sample says "nothing this time"
     # (None) and starts a fresh batch on the next draw: the solver may ask again at the next
