@@ -151,9 +151,10 @@ class MotionStreams:
         key = (d, a1[1], a2[1], tuple(bq), tuple(sorted(self.drawers.items())))
         if start is not None:
             # The arm is where an earlier plan put it for this very motion: that motion.
-            for k, m in self._drawer_motions:
-                if k == key and self._snap(m.arm_path, start) is not None:
-                    return DrawerMotion(d, self._snap(m.arm_path, start), m.drawer_path)
+            taken = self._planned_from(self._drawer_motions, key, start, lambda m: m.arm_path)
+            if taken is not None:
+                m, path = taken
+                return DrawerMotion(d, path, m.drawer_path)
         with self.planning(moving=d):
             self.world.set_drawer(d, a1[1])
             if not self._reachable(bq, self.world.handle_pose(d)):
@@ -197,9 +198,19 @@ class MotionStreams:
             # the plan moves the arm there again, a motion of length zero, and the next
             # replan is the same (the clutter family's N = 4, K = 1, seed 5 did so for 83
             # cycles, until its 100 ran out).
-            for k, p in self._press_paths:
-                if k == key and self._snap(p, start) is not None:
-                    return self._snap(p, start)
+            taken = self._planned_from(self._press_paths, key, start, lambda p: p)
+            if taken is not None:
+                return taken[1]
+        return None
+
+    def _planned_from(self, planned: list, key, start, path_of):
+        """The first of ``planned`` ((key, motion) pairs) with ``key`` whose arm path (by
+        ``path_of``) starts where the arm is (``start``, within SNAP), and that path snapped
+        to ``start``; ``None`` when there is none."""
+        for k, m in planned:
+            path = self._snap(path_of(m), start) if k == key else None
+            if path is not None:
+                return m, path
         return None
 
     def plan_press(self, bq):
