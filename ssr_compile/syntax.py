@@ -30,11 +30,12 @@ def _cached_hash(cls):
     name = cls.__name__
 
     def __hash__(self):
-        h = self.__dict__.get("_hash")
-        if h is None:
+        try:
+            return self._hash
+        except AttributeError:
             h = hash((name, *(getattr(self, k) for k in keys)))
             object.__setattr__(self, "_hash", h)
-        return h
+            return h
 
     def __getstate__(self):
         # The cached hash depends on the process's string hashing seed: never pickle it.

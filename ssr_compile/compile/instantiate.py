@@ -60,6 +60,23 @@ class Instance:
     def __str__(self) -> str:
         return f"{self.stream}({', '.join(self.inputs)})"
 
+    def __hash__(self) -> int:
+        # computed once: instances are looked up in large sets while instantiating
+        try:
+            return self._hash
+        except AttributeError:
+            h = hash((self.stream, self.inputs, self.kind))
+            object.__setattr__(self, "_hash", h)
+            return h
+
+    def __getstate__(self):
+        # the cached hash depends on the process's string hashing seed: never pickle it
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+
+    def __setstate__(self, state):
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
+
 
 @dataclass
 class Result:
@@ -335,13 +352,14 @@ def instantiate(
     else:
         # The loop ran to the limit: were more instances possible (through the facts of the
         # last depth)?
+        made_or_disabled = seen | disabled
         out.saturated = not any(
             True
             for stream, kind in schemas
             for binding, _f in _matches(stream.inputs, stream.domain, index, levels, fresh)
             if not unread(stream, binding)
             and Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind)
-            not in seen | disabled
+            not in made_or_disabled
         )
 
     # Cost functions: every term whose domain holds gets a value (real, else optimistic).

@@ -53,44 +53,57 @@ class _SupportTracker:
         # negation (to be checked), and it binds no variable (absent atoms may hold later)
         self.unknown = unknown
         self.state: set[S.Atom] = set()
-        self.index: dict[str, list[S.Atom]] = defaultdict(list)
+        # the state's atoms by predicate (insertion-ordered sets), kept up to date step by step
+        self.index: dict[str, dict[S.Atom, None]] = defaultdict(dict)
         self.cache: dict[tuple[S.Atom, bool], tuple[bool, frozenset]] = {}
+        self.guards: dict[tuple, list[S.Atom]] = {}  # (:meth:`bindings`; the state's atoms aside)
 
     def set_state(self, state: set[S.Atom]) -> None:
         self.state = state
-        self.index = defaultdict(list)
+        self.index = defaultdict(dict)
         for a in state:
-            self.index[a.pred].append(a)
+            self.index[a.pred][a] = None
+        self.cache = {}
+
+    def step(self, state: set[S.Atom], adds: set[S.Atom], dels: set[S.Atom]) -> None:
+        """The state after a step that deleted ``dels`` and added ``adds`` (``state``)."""
+        self.state = state
+        for a in dels:
+            self.index[a.pred].pop(a, None)
+        for a in adds:
+            self.index[a.pred][a] = None
         self.cache = {}
 
     # holds(f) -> (truth, support): support is a frozenset of static atoms the truth rests on.
-    def holds(self, f, negate: bool = False) -> tuple[bool, frozenset]:
+    # ``env``: the objects of ``f``'s free variables (what substituting them first would give,
+    # without building the substituted formula: the axioms' bodies are asked for each step).
+    def holds(self, f, negate: bool = False, env: dict | None = None) -> tuple[bool, frozenset]:
         if f is None:
             return (not negate), frozenset()
         if isinstance(f, S.Atom):
-            return self.atom(f, negate)
+            return self.atom(_ground(f, env) if env else f, negate)
         if isinstance(f, S.Not):
-            return self.holds(f.arg, not negate)
+            return self.holds(f.arg, not negate, env)
         if isinstance(f, S.And | S.Or):
             conj = isinstance(f, S.And) != negate  # "all parts must be true (after negation)"
             support: set = set()
             if conj:
                 for part in f.args:
-                    ok, sup = self.holds(part, negate)
+                    ok, sup = self.holds(part, negate, env)
                     if not ok:
                         return False, frozenset()
                     support |= sup
                 return True, frozenset(support)
             found = None
             for part in f.args:
-                ok, sup = self.holds(part, negate)
+                ok, sup = self.holds(part, negate, env)
                 if ok and not (self.unknown and _checks(sup)):
                     return True, sup
                 if ok and found is None:  # true only while unchecked values hold: the last resort
                     found = sup
             return (True, found) if found is not None else (False, frozenset())
         if isinstance(f, S.Imply):
-            return self.holds(S.Or((S.Not(f.left), f.right)), negate)
+            return self.holds(S.Or((S.Not(f.left), f.right)), negate, env)
         if isinstance(f, S.Exists | S.Forall):
             existential = isinstance(f, S.Exists) != negate
             support = set()
@@ -98,8 +111,9 @@ class _SupportTracker:
             # existential, those where it can hold; for a universal, those where it can fail
             # (the others hold trivially, with no support).
             polarity = negate if existential else not negate
-            for binding in self.bindings(f.params, f.body, polarity):
-                ok, sup = self.holds(substitute(f.body, binding), negate)
+            outer = _outer(env, f.params)
+            for binding in self.bindings(f.params, f.body, polarity, outer):
+                ok, sup = self.holds(f.body, negate, {**outer, **binding} if outer else binding)
                 if existential and ok:
                     return True, sup
                 if not existential:
@@ -135,24 +149,30 @@ class _SupportTracker:
         support: set = set()
         for ax in self.axioms[a.pred]:
             binding = {p.name: arg for p, arg in zip(ax.parameters, a.args)}
-            body = substitute(ax.body, binding)
-            ok, sup = self.holds(body, False)
+            body = ax.body
+            ok, sup = self.holds(body, False, binding)
             if ok and not negate:
                 return True, sup
             if ok and negate:
                 return False, frozenset()
             if negate:
                 # Why the body fails: its negation holds, with a support.
-                _, why = self.holds(body, True)
+                _, why = self.holds(body, True, binding)
                 support |= why
         return negate, frozenset(support)
 
-    def bindings(self, params: tuple[S.Typed, ...], body, negate: bool = False):
+    def bindings(self, params: tuple[S.Typed, ...], body, negate: bool = False, env=None):
         """Candidate bindings for quantified variables: those under which ``body`` (negated
-        if ``negate``) can be true, joined from the state atoms that must then hold; every
-        object combination when those atoms do not bind all the variables."""
+        if ``negate``; its other free variables: ``env``) can be true, joined from the state
+        atoms that must then hold; every object combination when those atoms do not bind all
+        the variables."""
         names = [p.name for p in params]
-        positives = self._guards(body, negate, [])
+        key = (body, negate)
+        positives = self.guards.get(key)
+        if positives is None:
+            positives = self.guards[key] = self._guards(body, negate, [])
+        if env:
+            positives = [_ground(a, env) for a in positives]
         covered = {t.name for x in positives for t in x.args if isinstance(t, S.Var)}
         if positives and set(names) <= covered:
             seen = set()
@@ -196,6 +216,25 @@ class _SupportTracker:
             new = unify(first, fact, binding)
             if new is not None:
                 yield from self._join(rest, new)
+
+
+def _ground(atom: S.Atom, env: dict) -> S.Atom:
+    """``atom`` with the variables ``env`` binds replaced (``substitute`` on one atom)."""
+    return S.Atom(
+        atom.pred,
+        tuple(env.get(t.name, t) if isinstance(t, S.Var) else t for t in atom.args),
+        span=atom.span,
+    )
+
+
+def _outer(env: dict | None, params) -> dict:
+    """``env`` without the variables a quantifier over ``params`` binds anew (they shadow)."""
+    if not env:
+        return {}
+    shadowed = [p.name for p in params if p.name in env]
+    if not shadowed:
+        return env
+    return {k: v for k, v in env.items() if k not in shadowed}
 
 
 def fluent_predicates(domain: S.Domain) -> set[str]:
@@ -256,6 +295,7 @@ def plan_preimage(
     objects = [o.name for o in problem.objects] + [c.name for c in domain.constants]
     ev = _SupportTracker(domain, objects, static, unknown)
     state = {f for f in problem.init if isinstance(f, S.Atom)}
+    ev.set_state(state)
     out = Preimage()
     for i, (name, args) in enumerate(plan, start=1):
         schema = schemas.get(name)
@@ -266,8 +306,7 @@ def plan_preimage(
                 f"step {i}: '{name}' takes {len(schema.parameters)} arguments, got {len(args)}"
             )
         binding = {p.name: S.Const(v) for p, v in zip(schema.parameters, args)}
-        ev.set_state(state)
-        ok, support = ev.holds(substitute(schema.precondition, binding))
+        ok, support = ev.holds(schema.precondition, False, binding)
         if not ok:
             raise PlanInvalid(
                 f"step {i}: the precondition of ({name} {' '.join(args)}) does not hold"
@@ -282,7 +321,7 @@ def plan_preimage(
         out.cost_terms.update(costs)
         out.per_step_costs.append(set(costs))
         state = (state - dels) | adds
-    ev.set_state(state)
+        ev.step(state, adds, dels)
     ok, support = ev.holds(problem.goal)
     if not ok:
         raise PlanInvalid("the goal does not hold at the end of the plan")
