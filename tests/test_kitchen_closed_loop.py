@@ -409,3 +409,41 @@ def test_cook_seed_17_looks_where_its_belief_lost_the_block(minutes):
     res, agent = _run("cook", 17, PolicySettings(variant="both", budget=600, max_cycles=100))
     assert res.success, (res.reason, res.actions)
     assert agent.lost.fired >= 1
+
+
+def test_the_object_in_the_hand_hides_from_the_camera_what_is_behind_it():
+    # The inspect family's N = 2, seed 0: holding the box that had hidden the block, the robot
+    # counted each miss behind the box in its hand as a look, and its belief left the counter
+    # where the block was.  A particle on the camera's ray past the held box is not seen.
+    from ssr_compile.belief.particles import PoseBelief
+    from ssr_compile.sim.geometry import multiply
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.sim.world import CAMERA_EYE
+
+    ep = make_episode("cook", 0)
+    try:
+        agent = ep.agent
+        _look(agent, {"top_drawer": 0.0, "bottom_drawer": 0.0})
+        k = agent.known
+        ((grasp,),) = itertools.islice(agent.km.ks.sample_grasps("cracker_box"), 1)
+        k.arm = ARM_CARRY
+        w = agent.world
+        w.set_base(k.base)
+        w.set_arm(k.arm)
+        box = np.asarray(multiply(w.robot.tool_pose(), grasp.pose)[0])
+        eye = np.asarray(CAMERA_EYE)
+        past = box + 0.3 * (box - eye) / np.linalg.norm(box - eye)
+        belief = PoseBelief.point("block", agent.surfaces["counter"], (*past, 0.0))
+
+        def seen() -> bool:
+            agent._arrange()
+            try:
+                return bool(agent._seen("block", belief)[0])
+            finally:
+                w.held = None
+
+        assert seen()  # nothing else in the way: the test's point is in view
+        k.held = ("cracker_box", grasp)
+        assert not seen()
+    finally:
+        ep.close()
