@@ -33,11 +33,12 @@ KEEP_INSTANTIATIONS = 40
 
 
 def capture(path: Path, task: str, seed: int, cycles: int) -> None:
+    from ssr_compile.streams.environments.kitchen import make_episode
+
     import ssr_compile.compile.pipeline as pipeline
     import ssr_compile.solver.focused as focused
     import ssr_compile.solver.loop as loop
     from ssr_compile.policy import PolicySettings, run_policy
-    from ssr_compile.streams.environments.kitchen import make_episode
 
     calls: dict[str, list] = {"instantiate": [], "plan_preimage": []}
 

@@ -415,10 +415,11 @@ def test_the_object_in_the_hand_hides_from_the_camera_what_is_behind_it():
     # The inspect family's N = 2, seed 0: holding the box that had hidden the block, the robot
     # counted each miss behind the box in its hand as a look, and its belief left the counter
     # where the block was.  A particle on the camera's ray past the held box is not seen.
-    from ssr_compile.belief.particles import PoseBelief
     from ssr_compile.sim.geometry import multiply
     from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.sim.world import CAMERA_EYE
+
+    from ssr_compile.belief.particles import PoseBelief
 
     ep = make_episode("cook", 0)
     try:

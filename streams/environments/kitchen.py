@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import pybullet as p
 from ssr_compile.sim.actions import BaseNoise, execute
+from ssr_compile.sim.geometry import pose
 from ssr_compile.sim.perception import observe
 from ssr_compile.sim.problem import (
     KnownState,
@@ -45,7 +46,6 @@ from ssr_compile.sim.problem import (
 )
 from ssr_compile.sim.robot import ARM_TUCK
 from ssr_compile.sim.tasks import TASKS, Task, make_task
-from ssr_compile.sim.geometry import pose
 from ssr_compile.sim.world import DRAWERS, ExecutionError, Held, World
 
 from ssr_compile import syntax as S
