@@ -26,7 +26,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+# last: a checkout named by PYTHONPATH (the version to time) comes first
+sys.path.append(str(ROOT))
 
 # the largest instantiations kept in a capture (they are most of the time; the file stays small)
 KEEP_INSTANTIATIONS = 40
