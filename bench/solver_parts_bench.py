@@ -8,9 +8,10 @@ and print the best total time per part and how many results differ from the capt
 change meant to keep behaviour must give 0).  Replay one capture with two versions of the
 code to compare them on the same inputs:
 
-    python bench/solver_parts_bench.py --capture /tmp/cook0.pkl --task cook --seed 0 --cycles 12
-    python bench/solver_parts_bench.py --replay /tmp/cook0.pkl
-    PYTHONPATH=/path/to/other/checkout python bench/solver_parts_bench.py --replay /tmp/cook0.pkl
+    python bench/solver_parts_bench.py --capture cook0.pkl --task cook --seed 0 --cycles 12
+    python bench/solver_parts_bench.py --replay cook0.pkl
+    PYTHONPATH=OTHER_CHECKOUT python bench/solver_parts_bench.py --replay cook0.pkl
+    python bench/solver_parts_bench.py --capture cook0.pkl --replay cook0.pkl --full  # whole episode
 
 A task file (``ssr-compile tasks generate ... > F.toml``) is accepted as ``--task F.toml``.
 Python's garbage collector is paused during the replayed calls, as the compiler pauses it.
@@ -151,7 +152,12 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--cycles", type=int, default=12, help="cycles of the episode captured")
     ap.add_argument("--runs", type=int, default=3, help="replays of each call (best is kept)")
+    ap.add_argument(
+        "--full", action="store_true", help="the whole episode (100 cycles) and 5 replays"
+    )
     args = ap.parse_args(argv)
+    if args.full:
+        args.cycles, args.runs = 100, 5
     if not args.capture and not args.replay:
         ap.error("give --capture FILE and/or --replay FILE")
     if args.capture:
