@@ -448,3 +448,45 @@ def test_the_object_in_the_hand_hides_from_the_camera_what_is_behind_it():
         assert not seen()
     finally:
         ep.close()
+
+
+def test_a_look_again_after_no_plan_gives_a_belief_that_is_not_localized_some_of_its_prior(
+    tmp_path,
+):
+    # The inspect family's N = 4, seed 1: a belief left where the camera cannot see, and none
+    # of it on the counter where the block stood behind the box.  Looking again after no plan
+    # (an update without a step) hands part of the prior back; a look with no plan asked
+    # for does not.
+    from ssr_compile.belief.particles import PoseBelief
+
+    task = tmp_path / "hidden.toml"
+    task.write_text(
+        'goal = ["On block bottom_drawer", "Closed bottom_drawer"]\n'
+        "[objects]\n"
+        'block = { kind = "block", on = "counter" }\n'
+        'cracker_box = { kind = "cracker_box", on = "counter" }\n'
+        "[hide]\n"
+        'target = "block"\n'
+        'by = ["cracker_box"]\n'
+        "[prior]\n"
+        "block = { counter = 1, top_drawer = 1 }\n"
+        'cracker_box = ["counter"]\n'
+    )
+    ep = make_episode(str(task), 0)
+    try:
+        agent = ep.agent
+        closed = {"top_drawer": 0.0, "bottom_drawer": 0.0}
+        _look(agent, closed)  # the first look
+        pb = agent.known.beliefs["block"]
+        weights = np.where(pb.surface_names == "top_drawer", pb.weights, 0.0)
+        pb = PoseBelief(pb.obj, pb.surfaces, pb.labels, pb.poses, weights / weights.sum(),
+                        pb.z_offset)  # fmt: skip
+        agent.known.beliefs["block"] = pb  # the block all in the top drawer
+        assert pb.prob_surface("counter") == 0.0
+        assert _look(agent, closed).prob_surface("counter") == 0.0  # a look, no plan asked
+        agent.problem()  # the policy asks for a plan, finds none, and looks again
+        again = _look(agent, closed)
+        assert again.prob_surface("counter") > 0.0
+        assert again.prob_surface("top_drawer") < 1.0
+    finally:
+        ep.close()

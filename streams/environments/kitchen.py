@@ -49,7 +49,7 @@ from ssr_compile.sim.tasks import TASKS, Task, make_task
 from ssr_compile.sim.world import DRAWERS, ExecutionError, Held, World
 
 from ssr_compile import syntax as S
-from ssr_compile.belief.lost import LostTest
+from ssr_compile.belief.lost import LostTest, mix_prior
 from ssr_compile.belief.observation import visibility_mask
 from ssr_compile.belief.particles import ObservationModel, PoseBelief, derived_rng, update
 from ssr_compile.parse import parse_file
@@ -149,6 +149,8 @@ def _kitchen_files() -> tuple[S.Domain, S.StreamFile]:
 # particles per surface of the prior a lost belief is scored against and drawn from (the
 # region a box hides on the counter is a few percent of it)
 LOST_PARTICLES = 400
+# the share of the prior a belief not localized takes back when no plan was found from it
+WIDEN_MASS = 0.5
 
 
 class KitchenAgent:
@@ -177,6 +179,7 @@ class KitchenAgent:
         self.placed: set[str] = set()  # objects the robot has put down (and not picked since)
         # misses of a belief the camera saw all of, scored against the prior (belief/lost.py)
         self.lost = LostTest()
+        self.asked = False  # a problem asked for since the last update (:meth:`update`)
         self.km = KitchenModule(self.task, rng)
         self.surfaces = {s: canonical_surface(world, s) for s in world.surfaces}
         self._constants = (
@@ -189,6 +192,7 @@ class KitchenAgent:
     def problem(self) -> tuple[S.Problem, StreamsModule]:
         k = self.known
         assert k is not None, "update(None, observation) first"
+        self.asked = True  # (see :meth:`update`)
         problem, values = state_problem(self.task, k)
         self.km.drawers = dict(k.drawers)
         held = None if k.held is None else k.held[0]
@@ -228,6 +232,11 @@ class KitchenAgent:
         return "; ".join(parts)
 
     def update(self, step: Step | None, obs: KitchenObservation) -> None:
+        # No step after a problem was asked for: the policy found no plan from this belief
+        # and looks again (``max_looks``).  A belief that left no place to look or to act may
+        # be wrong, not only unlucky: its objects not localized take back some of the prior.
+        widen = self.known is not None and step is None and self.asked
+        self.asked = False
         if self.known is None:
             self._start(obs)
         k = self.known
@@ -243,7 +252,7 @@ class KitchenAgent:
             for o, pb in k.beliefs.items():
                 if pb.prob_surface("stove") >= 0.95:
                     k.cooked.add(o)
-        self._look(obs)
+        self._look(obs, widen)
 
     # -- belief update ------------------------------------------------------------------------
     def _start(self, obs: KitchenObservation) -> None:
@@ -345,7 +354,13 @@ class KitchenAgent:
                 quat = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
                 p.resetBasePositionAndOrientation(body, (x, y, z), quat, physicsClientId=w.client)
 
-    def _look(self, obs: KitchenObservation) -> None:
+    def _look(self, obs: KitchenObservation, widen: bool = False) -> None:
+        """The beliefs after ``obs``; with ``widen``, each belief not localized and not
+        detected now is mixed with its prior (:data:`WIDEN_MASS`; the prior's particles in
+        view weighted by the miss).  The inspect family's N = 4, K = 1, seed 1 opened both
+        drawers and saw no block; its belief lay in the drawers where the camera does not
+        see and nowhere on the counter, where the block stood behind the box: no plan, and
+        each look again a miss of a belief that expected one."""
         k = self.known
         assert k is not None
         self._arrange()
@@ -361,6 +376,9 @@ class KitchenAgent:
                     post = self.lost.miss(
                         pbw, mask, lambda o=o, r=rng: self._prior(o, r), self.model, rng, post
                     )
+                    if widen and not is_localized(to_canonical(post, k.drawers)):
+                        prior, prior_mask = self._prior(o, rng)
+                        post = mix_prior(post, prior, prior_mask, WIDEN_MASS, self.model, rng)
                 else:
                     self.lost.reset(o)
                 k.beliefs[o] = to_canonical(post, k.drawers)
