@@ -24,7 +24,7 @@ class Span:
         return f"{self.line}:{self.col}"
 
 
-def _cached_hash(cls):
+def cached_hash(cls):
     """Replace a frozen dataclass's ``__hash__`` with one computed once per instance."""
     keys = tuple(f.name for f in fields(cls) if f.compare)
     name = cls.__name__
@@ -57,7 +57,7 @@ def node(cls):
     if "span" not in cls.__annotations__:
         cls.__annotations__["span"] = "Span | None"
         cls.span = field(default=None, compare=False, repr=False, kw_only=True)
-    return _cached_hash(dataclass(frozen=True)(cls))
+    return cached_hash(dataclass(frozen=True)(cls))
 
 
 # ---------------------------------------------------------------- terms

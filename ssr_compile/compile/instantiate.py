@@ -49,6 +49,7 @@ MAX_INSTANCES = 20000
 MAX_LEAF_TESTS = 100000
 
 
+@S.cached_hash  # looked up in large sets while instantiating
 @dataclass(frozen=True)
 class Instance:
     """One stream (or function) applied to input objects."""
@@ -59,23 +60,6 @@ class Instance:
 
     def __str__(self) -> str:
         return f"{self.stream}({', '.join(self.inputs)})"
-
-    def __hash__(self) -> int:
-        # computed once: instances are looked up in large sets while instantiating
-        try:
-            return self._hash
-        except AttributeError:
-            h = hash((self.stream, self.inputs, self.kind))
-            object.__setattr__(self, "_hash", h)
-            return h
-
-    def __getstate__(self):
-        # the cached hash depends on the process's string hashing seed: never pickle it
-        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
-
-    def __setstate__(self, state):
-        for k, v in state.items():
-            object.__setattr__(self, k, v)
 
 
 @dataclass
