@@ -58,6 +58,7 @@ def generate(kind: str, n: int, k: int) -> str:
     lines += [f'{h} = {{ kind = "{kinds[h]}", on = "counter" }}' for h in hiders]
     lines += ["", "[hide]  # the seed picks the one in front of the block", 'target = "block"']
     lines.append("by = [" + ", ".join(f'"{h}"' for h in hiders) + "]")
+    lines.append("reachable = true  # the one in front only where the robot can grasp it")
     lines += ["", "[prior]"]
     if kind == "cook":
         lines.append('block = ["counter"]')

@@ -21,6 +21,7 @@ prior and, optionally, which objects may hide one from the camera::
     [hide]      # one of these, drawn from the seed, stands between the camera and the target
     target = "block"
     by = ["cracker_box", "sugar_box"]
+    reachable = true  # optional: the one in front only where the robot can grasp it
 
 Goal facts: ``On OBJECT SURFACE``, ``Closed DRAWER``, ``Cooked OBJECT``, ``StoveOff``.
 :func:`load_task_file` reads and checks a file (bad input -- an unknown key, a wrong type, an
@@ -50,7 +51,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 KEYS = ("name", "goal", "drawers", "objects", "prior", "hide")
 OBJECT_KEYS = ("kind", "on", "size")
-HIDE_KEYS = ("target", "by")
+HIDE_KEYS = ("target", "by", "reachable")
 SURFACES = tuple(surface_rects())
 GOALS = {"On": 2, "Closed": 1, "Cooked": 1, "StoveOff": 0}
 # Objects standing on one surface may cover at most this share of it (random placement of
@@ -82,6 +83,9 @@ class TaskSpec:
     prior: dict[str, list[tuple[str, float]]]
     drawers: dict[str, float] = field(default_factory=dict)
     hide: tuple[str, tuple[str, ...]] | None = None  # (target, the objects that may hide it)
+    # ``hide.reachable``: the object in front of the target is drawn only where some grasp of
+    # it is reached from some base (:func:`~.tasks._place_occluder`)
+    hide_reachable: bool = False
     file: str | None = None
     text: str | None = field(default=None, repr=False)
 
@@ -169,8 +173,13 @@ def parse_task(
     goal = _goal(table["goal"], by_name, bad)
     prior = _prior(table["prior"], by_name, bad)
     hide = _hide(table["hide"], by_name, bad) if "hide" in table else None
+    reachable = table["hide"].get("reachable", False) if hide is not None else False
+    if not isinstance(reachable, bool):
+        raise bad("hide.reachable", f"expected true or false, got {reachable!r}")
     _check_room(objects, bad)
-    return TaskSpec(name, objects, goal, prior, drawers, hide, file=file, text=text)
+    return TaskSpec(
+        name, objects, goal, prior, drawers, hide, hide_reachable=reachable, file=file, text=text
+    )
 
 
 def _str_list(value: Any, key: str, bad, what: str) -> list[str]:

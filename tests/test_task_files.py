@@ -179,6 +179,16 @@ def _file(tmp_path, **keys) -> Path:
         ({"prior": "{}"}, "prior", "no prior for block"),
         ({"drawers": '{ top_drawer = "ajar" }'}, "drawers.top_drawer", 'expected "open"'),
         ({"hide": '{ target = "block", by = ["block"] }'}, "hide.by", "cannot hide itself"),
+        (
+            {
+                "objects": '{ block = { kind = "block", on = "counter" }, '
+                'box = { kind = "cracker_box", on = "counter" } }',
+                "prior": '{ block = ["counter"], box = ["counter"] }',
+                "hide": '{ target = "block", by = ["box"], reachable = "yes" }',
+            },
+            "hide.reachable",
+            "expected true or false",
+        ),
     ],
 )
 def test_bad_task_files_are_bad_input_naming_file_and_key(tmp_path, capsys, keys, key, said):
@@ -247,6 +257,8 @@ def test_the_family_generator_writes_valid_task_files(tmp_path, capsys):
     out = tmp_path / "c.toml"
     assert main(["tasks", "generate", "--objects", "3", "--hiders", "2", "-o", str(out)]) == 0
     assert load_task_file(out).hide == ("block", ("cracker_box", "sugar_box"))
+    assert load_task_file(out).hide_reachable  # the family's boxes in front can be moved
+    assert not load_task_file(shipped_task_file("cook")).hide_reachable  # the paper's worlds
     assert main(["tasks", "generate", "--objects", "13", "--hiders", "2"]) == 2
     assert "objects must be from 2 to 12" in capsys.readouterr().err
     assert main(["tasks", "generate", "--objects", "3", "--hiders", "3"]) == 2
@@ -274,6 +286,43 @@ def test_a_generated_kitchen_hides_the_block_behind_one_of_its_boxes(tmp_path):
     a, b = make_task(path, 3), make_task(path, 3)  # seeded
     try:
         assert a.world.true_state() == b.world.true_state()
+    finally:
+        a.close()
+        b.close()
+
+
+@pytest.mark.slow
+def test_the_box_in_front_is_one_the_robot_can_grasp_when_the_file_says_reachable(tmp_path):
+    # The family's N = 4, K = 2, seed 9: the sugar box in front of the block, the cracker box
+    # placed after it in its way, no grasp of the sugar box reached from any base (the
+    # episode proved every optimistic problem unsolvable up to level 12).  With ``reachable``
+    # the seed draws another world, whose box in front some grasp reaches.
+    from ssr_compile.sim.perception import visible_fraction
+    from ssr_compile.sim.task_family import generate
+    from ssr_compile.sim.tasks import _reachable
+
+    text = generate("cook", 4, 2)
+    assert "reachable = true" in text
+    free, stuck = tmp_path / "free.toml", tmp_path / "stuck.toml"
+    free.write_text(text)
+    stuck.write_text(text.replace("reachable = true", "reachable = false"))
+    a, b = make_task(free, 9), make_task(stuck, 9)
+    try:
+        assert a.world.true_state() != b.world.true_state()
+
+        def front(task):  # the box without which the camera sees the block
+            for box in ("cracker_box", "sugar_box"):
+                rest = task.world.support[box]
+                task.world.remove_object(box)
+                seen = visible_fraction(task.world, "block")
+                task.world.place_object(box, *rest)
+                if seen > 0.1:
+                    return box
+            raise AssertionError("no box hides the block")
+
+        assert not _reachable(b.world, front(b))
+        assert _reachable(a.world, front(a))
+        assert visible_fraction(a.world, "block") <= 0.1
     finally:
         a.close()
         b.close()
