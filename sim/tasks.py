@@ -285,11 +285,9 @@ def _generate(spec: TaskSpec, world: World, rng: np.random.Generator, seed: int)
                 if other != first:
                     place(other)
             # (``hide.reachable``) Placed where no base reaches it, or boxed in by the others
-            # placed after it, the box in front hides the block for good: the streams reach
-            # past no object that stands where it is, so moving those first does not help.
-            # The family's N = 4, K = 2, seed 9 proved every optimistic problem unsolvable up
-            # to level 12 (the sugar box behind the cracker box), its seed 0 used its 600 s in
-            # 10 cycles.
+            # placed after it, the box in front hides the block for good: the family's N = 4,
+            # K = 2, seed 9 (the cracker box in the way of the sugar box's grasps; without it,
+            # one is reached) proved every optimistic problem unsolvable up to level 12.
             if not spec.hide_reachable or _reachable(world, first):
                 return
     raise spec.error(
