@@ -202,13 +202,29 @@ def _place_occluder(world: World, rng: np.random.Generator, box: str, target: st
 REACH_PROBE = 100
 
 
-def _reachable(world: World, box: str) -> bool:
-    """Some grasp of ``box`` (on the counter) is reached from some base, with the world as it
+def _clear_to_reach(world: World, box: str, target: str, moved: bool) -> bool:
+    """``box`` can be grasped and, if the goal moves ``target`` (``moved``), so can ``target``
+    with ``box`` out of the scene."""
+    if not _reachable(world, box):
+        return False
+    if not moved:
+        return True
+    surface, rel = world.support[box]
+    world.remove_object(box)
+    try:
+        return _reachable(world, target)
+    finally:
+        world.place_object(box, surface, rel)
+
+
+def _reachable(world: World, obj: str) -> bool:
+    """Some grasp of ``obj`` where it stands is reached from some base, with the world as it
     is (:data:`REACH_PROBE` draws, from a generator of the pose's own: a world that passes
     keeps the seed's draws as they were)."""
     from .samplers import KitchenStreams, ObjPose
 
-    p = ObjPose(box, "counter", world.support[box][1])
+    surface, rel = world.support[obj]
+    p = ObjPose(obj, surface, rel)
     rng = _probe_rng(p)
 
     ks = KitchenStreams(world, rng, max_attempts=REACH_PROBE, margin_corners=False)
@@ -288,7 +304,12 @@ def _generate(spec: TaskSpec, world: World, rng: np.random.Generator, seed: int)
             # placed after it, the box in front hides the block for good: the family's N = 4,
             # K = 2, seed 9 (the cracker box in the way of the sugar box's grasps; without it,
             # one is reached) proved every optimistic problem unsolvable up to level 12.
-            if not spec.hide_reachable or _reachable(world, first):
+            # The target, when the goal moves it, must then be reachable with that box out of
+            # the way: N = 4, K = 2, seed 0 had the block between the cracker box in front
+            # and the sugar box behind it, no grasp of the block reached with the cracker box
+            # gone and none of the sugar box (its episode used its 600 s, "proved
+            # unsolvable").
+            if not spec.hide_reachable or _clear_to_reach(world, first, target, target in moved):
                 return
     raise spec.error(
         "hide", f"with seed {seed}, none of {', '.join(hiders)} could hide {spec.hide[0]}"

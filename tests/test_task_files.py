@@ -299,7 +299,7 @@ def test_the_box_in_front_is_one_the_robot_can_grasp_when_the_file_says_reachabl
     # the seed draws another world, whose box in front some grasp reaches.
     from ssr_compile.sim.perception import visible_fraction
     from ssr_compile.sim.task_family import generate
-    from ssr_compile.sim.tasks import _reachable
+    from ssr_compile.sim.tasks import _clear_to_reach, _reachable
 
     text = generate("cook", 4, 2)
     assert "reachable = true" in text
@@ -321,8 +321,17 @@ def test_the_box_in_front_is_one_the_robot_can_grasp_when_the_file_says_reachabl
             raise AssertionError("no box hides the block")
 
         assert not _reachable(b.world, front(b))
-        assert _reachable(a.world, front(a))
+        assert _clear_to_reach(a.world, front(a), "block", moved=True)
         assert visible_fraction(a.world, "block") <= 0.1
     finally:
         a.close()
         b.close()
+    # Seed 0: the cracker box in front can be grasped, but the block stands against the sugar
+    # box behind it, and neither the block (the cracker box gone) nor the sugar box is reached.
+    c = make_task(stuck, 0)
+    try:
+        assert front(c) == "cracker_box" and _reachable(c.world, "cracker_box")
+        assert not _clear_to_reach(c.world, "cracker_box", "block", moved=True)
+        assert _clear_to_reach(c.world, "cracker_box", "block", moved=False)
+    finally:
+        c.close()
