@@ -84,7 +84,8 @@ class TaskSpec:
     drawers: dict[str, float] = field(default_factory=dict)
     hide: tuple[str, tuple[str, ...]] | None = None  # (target, the objects that may hide it)
     # ``hide.reachable``: the object in front of the target is drawn only where some grasp of
-    # it is reached from some base (:func:`~.tasks._place_occluder`)
+    # it is reached from some base, and the target (when the goal moves it) with that object
+    # gone (:func:`~.tasks._clear_to_reach`)
     hide_reachable: bool = False
     file: str | None = None
     text: str | None = field(default=None, repr=False)

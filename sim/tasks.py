@@ -142,17 +142,20 @@ def _probe_rng(p) -> np.random.Generator:
     return np.random.default_rng(zlib.crc32(np.asarray((x, y, z, *q), float).tobytes()))
 
 
-def _graspable(world: World, rng: np.random.Generator, p, slack: bool = True) -> bool:
+def _graspable(
+    world: World, rng: np.random.Generator, p, slack: bool = True, attempts: int = 20
+) -> bool:
     """Some grasp of ``p.obj`` at ``p`` is reached from some base -- in a drawer: with that
     drawer open and the others closed, and so it is at ``p`` moved by :data:`GRASP_SLACK`
     (each shift alone, those that stay inside the drawer); elsewhere: with the drawers as
-    they are, at ``p`` alone when ``slack`` is off."""
+    they are, at ``p`` alone when ``slack`` is off.  ``attempts``: draws of bases and arm
+    configurations per grasp."""
     from .samplers import KitchenStreams, ObjPose
 
     # The bases checked along each axis of the landing margin alone, not at its corners: the
     # worlds of the seeds stay those they were (this asks whether the task is fair, not where
     # a robot may safely stand).
-    ks = KitchenStreams(world, rng, max_attempts=20, margin_corners=False)
+    ks = KitchenStreams(world, rng, max_attempts=attempts, margin_corners=False)
     (x, y, z), q = p.rel
     yaw = yaw_of(q)
     dxy, dyaw = GRASP_SLACK
@@ -219,20 +222,13 @@ def _clear_to_reach(world: World, box: str, target: str, moved: bool) -> bool:
 
 def _reachable(world: World, obj: str) -> bool:
     """Some grasp of ``obj`` where it stands is reached from some base, with the world as it
-    is (:data:`REACH_PROBE` draws, from a generator of the pose's own: a world that passes
-    keeps the seed's draws as they were)."""
-    from .samplers import KitchenStreams, ObjPose
+    is (:func:`_graspable` at that pose alone, :data:`REACH_PROBE` draws, from a generator of
+    the pose's own: a world that passes keeps the seed's draws as they were)."""
+    from .samplers import ObjPose
 
     surface, rel = world.support[obj]
     p = ObjPose(obj, surface, rel)
-    rng = _probe_rng(p)
-
-    ks = KitchenStreams(world, rng, max_attempts=REACH_PROBE, margin_corners=False)
-    with world.saved():
-        for (g,) in ks.sample_grasps(p.obj):
-            if next(iter(ks.inv_reach(p.obj, p, g)), None) is not None:
-                return True
-    return False
+    return _graspable(world, _probe_rng(p), p, slack=False, attempts=REACH_PROBE)
 
 
 def make_task(task: str | Path | TaskSpec, seed: int, *, gui: bool = False) -> Task:
