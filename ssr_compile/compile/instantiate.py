@@ -97,7 +97,7 @@ class Instantiation(PassResult):
     shared: dict[str, list[Result]] = field(default_factory=dict)
     # stream predicates optimistically false: each instance whose domain holds and whose value
     # is not known yet, by its atom (a plan relying on the atom's absence has it checked)
-    negated: dict[S.Atom, Result] = field(default_factory=dict)
+    negated: Any = field(default_factory=dict)  # S.Atom -> Result (:class:`NegatedChecks`)
     unknown: frozenset[str] = frozenset()  # the names of those predicates
     # optimistic object -> its stand-in value (``standins``: :mod:`.standins`), and the
     # objects that several instances output (equal stand-in values): object -> those results
@@ -431,19 +431,56 @@ def _standin_values(standins: StandIns | None, out: Instantiation):
 def _negated_predicates(streams, truth, index, levels, disabled, out: Instantiation) -> None:
     """The instances of the stream predicates optimistically false whose domain holds (at any
     level) and whose value is unknown (``disabled``: evaluated): nothing is certified, but a
-    plan relying on the absence of one of their atoms has them checked."""
+    plan relying on the absence of one of their atoms has them checked.  Made when the plan's
+    preimage asks for one (:class:`NegatedChecks`): a lazy test's complement has one per pair
+    of poses, and a plan relies on a few."""
     out.unknown = frozenset(name for name, value in truth.items() if not value)
-    for p in streams.predicates:
-        if truth[p.name]:
-            continue
-        for binding, dom_facts in _matches(p.params, p.domain, index, levels):
-            args = tuple(binding[t.name] for t in p.params)
-            inst = Instance(p.name, args, "test")
-            if inst in disabled:
+    preds = {p.name: p for p in streams.predicates if not truth[p.name]}
+    if preds:
+        out.negated = NegatedChecks(preds, levels, disabled)
+
+
+class NegatedChecks:
+    """``atom -> Result``: the instance of an optimistically false stream predicate that a
+    plan relying on ``atom``'s absence has checked, when its domain holds in the optimistic
+    problem and its value is not known yet (else ``get`` gives the default)."""
+
+    def __init__(self, preds: dict[str, S.StreamPredicate], levels, disabled) -> None:
+        self.preds = preds
+        self.levels = levels
+        self.disabled = disabled
+        self.made: dict[S.Atom, Result | None] = {}
+
+    def get(self, atom: S.Atom, default=None) -> Result | None:
+        if atom not in self.made:
+            self.made[atom] = self._make(atom)
+        found = self.made[atom]
+        return default if found is None else found
+
+    def _make(self, atom: S.Atom) -> Result | None:
+        p = self.preds.get(atom.pred)
+        if p is None or len(atom.args) != len(p.params):
+            return None
+        binding = {t.name: a.name for t, a in zip(p.params, atom.args)}
+        dom = [a for a in S.conjuncts(p.domain) if isinstance(a, S.Atom)]
+        mentioned = {t.name for a in dom if a.pred != "=" for t in a.args if isinstance(t, S.Var)}
+        if not all(t.name in mentioned for t in p.params):
+            return None  # a parameter no atom binds: no instance (as _matches)
+        facts = []
+        for a in dom:
+            if a.pred == "=":
+                if not _eq_holds(a, binding):
+                    return None
                 continue
-            lvl = 1 + max((levels[f] for f in dom_facts), default=0)
-            atom = S.Atom(p.name, tuple(S.Const(a) for a in args))
-            out.negated.setdefault(atom, Result(inst, (), (), tuple(dom_facts), lvl))
+            fact = ground_atom(a, binding)
+            if fact not in self.levels:
+                return None
+            facts.append(fact)
+        inst = Instance(p.name, tuple(binding[t.name] for t in p.params), "test")
+        if inst in self.disabled:
+            return None
+        lvl = 1 + max((self.levels[f] for f in facts), default=0)
+        return Result(inst, (), (), tuple(facts), lvl)
 
 
 def real_function_terms(

@@ -25,6 +25,16 @@ def optimistic_truth(
     """The optimistic value of each predicate ``streams`` declares (see the module doc)."""
     if streams is None or not streams.predicates:
         return {}
+    signs = domain_signs(domain, streams, problem)
+    return {p.name: signs.get(p.name) == {True} for p in streams.predicates}
+
+
+def domain_signs(
+    domain: S.Domain, streams: S.StreamFile | None, problem: S.Problem | None
+) -> dict[str, set[bool]]:
+    """For each predicate, the signs it is read with (True: where it being true permits
+    plans) by the actions, the goal, the derived predicates they rely on (a derived
+    predicate read with a sign passes it on to its body) and the stream domains."""
     signs: dict[str, set[bool]] = defaultdict(set)
     roots: list[S.Formula | None] = [problem.goal if problem is not None else None]
     for a in domain.actions:
@@ -32,16 +42,17 @@ def optimistic_truth(
         roots.extend(_conditions(a.effect))
     for root in roots:
         _signs(root, True, signs)
-    for block in (*streams.streams, *streams.rules):
-        _signs(block.domain, True, signs)
-    for p in streams.predicates:
-        _signs(p.domain, True, signs)
+    if streams is not None:
+        for block in (*streams.streams, *streams.rules):
+            _signs(block.domain, True, signs)
+        for p in streams.predicates:
+            _signs(p.domain, True, signs)
     axioms: dict[str, list[S.Axiom]] = defaultdict(list)
     for ax in domain.axioms:
         axioms[ax.name].append(ax)
     done: set[tuple[str, bool]] = set()
     changed = True
-    while changed:  # a derived predicate used with a sign passes it on to its body
+    while changed:
         changed = False
         for name, body_of in axioms.items():
             for sign in tuple(signs.get(name, ())):
@@ -50,7 +61,7 @@ def optimistic_truth(
                     changed = True
                     for ax in body_of:
                         _signs(ax.body, sign, signs)
-    return {p.name: signs.get(p.name) == {True} for p in streams.predicates}
+    return signs
 
 
 def _conditions(effect) -> list:

@@ -21,9 +21,16 @@ class Evaluation:
     """Stream state that persists across iterations: generators, results, values."""
 
     def __init__(
-        self, streams: S.StreamFile, module: StreamsModule, values: ValueTable, stats: Statistics
+        self,
+        streams: S.StreamFile,
+        module: StreamsModule,
+        values: ValueTable,
+        stats: Statistics,
+        lazy: dict[str, str] | None = None,
     ):
         self.decl = {s.name: s for s in streams.streams}
+        # a lazy test's complement predicate -> the test it calls (true when the test fails)
+        self.lazy = dict(lazy or {})
         self.decl.update((p.name, p) for p in predicate_tests(streams))
         # each stream predicate's optimistic value (set by the solver's loop): a check of one
         # succeeds when the predicate has that value
@@ -73,9 +80,10 @@ class Evaluation:
                 binding[opt] = real
             return True
         self.called = True
-        fn = self.module.streams[inst.stream]
+        name = self.lazy.get(inst.stream, inst.stream)
+        fn = self.module.streams[name]
         args = tuple(self.values.value(x) for x in inst.inputs)
-        stats = self.stats.stream(inst.stream)
+        stats = self.stats.stream(name)
         start = time.perf_counter()
         stats.calls += 1
         try:
@@ -101,8 +109,12 @@ class Evaluation:
     def _call_test(self, res: Result, inst: Instance, fn, args: tuple) -> bool:
         decl = self.decl[inst.stream]
         expect = self.expect.get(inst.stream)  # None: a test stream, else a predicate
-        what = "test stream" if expect is None else "predicate"
-        value = ok = call_test(fn, args, inst.stream, what)
+        test = self.lazy.get(inst.stream)
+        if test is not None:  # the complement of a lazy test: true when the test fails
+            value = ok = not call_test(fn, args, test, "test stream")
+        else:
+            what = "test stream" if expect is None else "predicate"
+            value = ok = call_test(fn, args, inst.stream, what)
         if expect is not None:
             ok = value == expect
         self.exhausted.add(inst)  # deterministic: never retried
@@ -169,7 +181,7 @@ class Evaluation:
         """Count the outcome of the last :meth:`evaluate` if it really called the stream."""
         if not self.called:
             return
-        stats = self.stats.stream(name)
+        stats = self.stats.stream(self.lazy.get(name, name))
         if ok:
             stats.successes += 1
         else:

@@ -8,6 +8,7 @@ import time
 
 from .. import syntax as S
 from ..compile.instantiate import Instance, Instantiation, Result, real_instances
+from ..compile.lazy_tests import lazy_tests
 from ..compile.pipeline import compile_problem
 from ..compile.predicates import optimistic_truth
 from ..compile.standins import StandIns
@@ -53,12 +54,6 @@ class SolverLoop:
         if self.values is None:
             taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
             self.values = ValueTable(module.values, taken)
-        self.ev = Evaluation(streams, module, self.values, self.stats)
-        self.ev.expect = optimistic_truth(domain, streams, problem)
-        self.ev.results.extend(state.evaluated)
-        self.inherited = len(state.evaluated)  # ev.results[:inherited] came from earlier calls
-        for r in state.evaluated:  # their facts have complexity 0 in this call
-            self.ev.fact_complexity.update((f, 0) for f in r.certified)
         self.say = options.progress or (lambda msg: None)
         self.standins = StandIns.of(module, self.values.value)
         # streams declared never to succeed on optimistic values (StreamInfo.p_success 0)
@@ -90,6 +85,21 @@ class SolverLoop:
         self.eager_streams = {
             s.name for s in streams.streams if not s.is_test and module.info_for(s.name).eager
         }
+        # cheap tests read only through their failures: stated where they failed, checked
+        # where a plan relies on them (compile/lazy_tests.py)
+        self.lazy: dict[str, str] = {}
+        if options.lazy_tests and self.eager_tests:
+            turned = lazy_tests(domain, streams, problem, self.eager_tests)
+            if turned.tests:
+                self.domain, self.streams = domain, streams = turned.domain, turned.streams
+                self.lazy = turned.tests
+                self.eager_tests -= set(turned.tests.values())
+        self.ev = Evaluation(streams, module, self.values, self.stats, self.lazy)
+        self.ev.expect = optimistic_truth(domain, streams, problem)
+        self.ev.results.extend(state.evaluated)
+        self.inherited = len(state.evaluated)  # ev.results[:inherited] came from earlier calls
+        for r in state.evaluated:  # their facts have complexity 0 in this call
+            self.ev.fact_complexity.update((f, 0) for f in r.certified)
 
     def run(self) -> Solution:
         """The algorithm's loop: each registered algorithm (``dispatch.LOOPS``) gives its own."""
@@ -287,13 +297,17 @@ class SolverLoop:
         now, in order, and those deferred -- or the solution itself when nothing is left to
         evaluate now."""
         checks = self.ev.expect  # a stream predicate's check is never deferred
-        deferrable = lambda s: s not in checks and self.module.info_for(s).deferrable  # noqa: E731
+        deferrable = lambda s: s not in checks and self.info_for(s).deferrable  # noqa: E731
         now, later = reschedule_stream_plan(needed, pre, plan, inst, deferrable, self.defer)
         if not now:
             deferred = {o for r in later for o in r.outputs}
             steps = plan_steps(plan, self.values, deferred)
             return self.finish(SOLVED, steps, cost, certificate, deferred=later)
-        return order_stream_plan(now, self.module.info_for, stream_producers(now, inst)), later
+        return order_stream_plan(now, self.info_for, stream_producers(now, inst)), later
+
+    def info_for(self, name: str):
+        """The stream info of ``name`` (a lazy test's complement has its test's)."""
+        return self.module.info_for(self.lazy.get(name, name))
 
 
 def problem_size(compiled, operators: int | None) -> tuple[int, int, int, int | None]:

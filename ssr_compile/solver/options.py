@@ -35,6 +35,10 @@ class SolveOptions:
     values instead of rediscovering them one plan at a time; ``eager_cost=-1`` turns this off.
     With ``eager_tests``, so are the tests that cheap: a test that fails on real inputs is
     never an optimistic fact the planner builds a plan on (one planner call per failed test).
+    ``lazy_tests``: such a test that the domain reads only where it holding permits plans,
+    and only beside its own domain's atoms, is stated in the optimistic problem only where it
+    failed and checked where a plan relies on it (:mod:`ssr_compile.compile.lazy_tests`:
+    pairs of poses are then no longer most of each optimistic problem).
     ``redraws``: a generator whose draw a test of the same stream plan rejected may draw again
     at the same level, up to this many times per instance and level, instead of leaving the
     level without a sample (whose optimistic problem the planner may then have to prove
@@ -93,6 +97,7 @@ class SolveOptions:
     rebind: int | None = None
     eager_cost: float = EAGER_COST
     eager_tests: bool = True
+    lazy_tests: bool = True
     unit_cost: bool = False
     share: bool = False
     leaves: bool = True

@@ -86,10 +86,13 @@
     (exists (?o ?pb) (and (drawer ?d) (tall ?o) (atposeb ?o ?pb) (beliefon ?o ?pb ?d))))
 
   ; placing ?o at ?pb may collide with another object at its current belief
+  ; (the domain of test-cfree beside the test: where it holds, the solver states cfree's
+  ; failures alone and checks the pairs a plan relies on -- compile/lazy_tests.py; every
+  ; pose placed at is localized, every pose an object is at is a poseb)
   (:derived (unsafe ?o ?pb)
     (exists (?o2 ?pb2)
-      (and (poseb ?o ?pb) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
-           (not (cfree ?o ?pb ?o2 ?pb2)))))
+      (and (poseb ?o ?pb) (localized ?o ?pb) (atposeb ?o2 ?pb2) (poseb ?o2 ?pb2)
+           (not (= ?o ?o2)) (not (cfree ?o ?pb ?o2 ?pb2)))))
 
   ; the arm configuration from which ?o is picked or placed may be inside another object at
   ; its current belief (the approach starts there; inv-kin checks only what the robot put
@@ -98,7 +101,7 @@
   ; planner could see why and move the box first or grasp from elsewhere)
   (:derived (armblocked ?o ?bq ?aq)
     (exists (?o2 ?pb2)
-      (and (graspable ?o) (reach ?bq ?aq) (atposeb ?o2 ?pb2) (not (= ?o ?o2))
+      (and (graspable ?o) (reach ?bq ?aq) (atposeb ?o2 ?pb2) (poseb ?o2 ?pb2) (not (= ?o ?o2))
            (not (afree ?bq ?aq ?o2 ?pb2)))))
 
   ; the robot believes ?o is on ?s, precisely enough to act on it

@@ -20,10 +20,12 @@
   (:functions (Distance ?q1 ?q2) (total-cost))
 
   ; Placing ?b at ?p is unsafe when some other block rests where it overlaps ?p.
-  ; The solver learns which placements are safe from the test-cfree stream.
+  ; The solver learns which placements are safe from the test-cfree stream.  (Pose ?b2 ?p2)
+  ; holds wherever a block rests; stated beside the test, with the rest of its domain, it lets
+  ; the solver state only the pairs that failed and check those a plan relies on.
   (:derived (Unsafe ?b ?p)
     (exists (?b2 ?p2)
-      (and (Pose ?b ?p) (AtPose ?b2 ?p2) (not (= ?b ?b2))
+      (and (Pose ?b ?p) (AtPose ?b2 ?p2) (Pose ?b2 ?p2) (not (= ?b ?b2))
            (not (CFree ?b ?p ?b2 ?p2)))))
 
   (:derived (In ?b ?r)
