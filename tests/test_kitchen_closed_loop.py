@@ -411,6 +411,18 @@ def test_cook_seed_17_looks_where_its_belief_lost_the_block(minutes):
     assert agent.lost.fired >= 1
 
 
+@pytest.mark.slow
+def test_cook_seed_9001_reaches_the_goal_in_the_true_world(minutes):
+    # issue 39's held-out episode: it moved the cracker box, looked twice without seeing the
+    # block behind the sugar box and ended after 13 cycles, "level 9 would pass the cap"; at
+    # e51b065 it moves the cracker box twice, then the sugar box, and cooks the block (47
+    # cycles, 108 s of planning; no attempt near its time limit)
+    res, _ = _run("cook", 9001, PolicySettings(variant="both", budget=600, max_cycles=100))
+    assert res.success, (res.reason, res.actions)
+    names = [a.split()[0].lstrip("(") for a in res.actions]
+    assert "press-on" in names and names[-1] == "press-off"
+
+
 def test_the_object_in_the_hand_hides_from_the_camera_what_is_behind_it():
     # The inspect family's N = 2, seed 0: holding the box that had hidden the block, the robot
     # counted each miss behind the box in its hand as a look, and its belief left the counter
