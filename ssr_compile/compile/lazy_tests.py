@@ -35,7 +35,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 from .. import syntax as S
-from .predicates import domain_signs
+from ..formulas import atoms, changed_atoms
+from .formulas import substitute
+from .predicates import domain_signs, when_conditions
 
 PREFIX = "ssr-fails-"
 
@@ -125,51 +127,18 @@ def _only_here(pred: str, t: S.Stream, domain, streams, problem) -> bool:
     derived predicate's head mentions it, the problem states none and its goal does not
     mention it."""
     for s in (*streams.streams, *streams.rules):
-        if s is not t and pred in _preds(s.certified):
+        if s is not t and pred in _read(s.certified):
             return False
     for s in (*streams.streams, *streams.rules, *streams.functions, *streams.predicates):
-        if pred in _preds(s.domain):
+        if pred in _read(s.domain):
             return False
     if any(a.name == pred for a in domain.axioms):
         return False
-    if any(pred in _effect_preds(a.effect) for a in domain.actions):
+    if any(x.pred == pred for a in domain.actions for x in changed_atoms(a.effect)):
         return False
     if any(isinstance(f, S.Atom) and f.pred == pred for f in problem.init):
         return False
-    return pred not in _preds(problem.goal)
-
-
-def _preds(f) -> set[str]:
-    out: set[str] = set()
-    stack = [f]
-    while stack:
-        n = stack.pop()
-        if n is None:
-            continue
-        if isinstance(n, S.Atom):
-            out.add(n.pred)
-        elif not isinstance(n, S.Var | S.Const | S.Num | S.FuncTerm):
-            stack.extend(S.children(n))
-    return out
-
-
-def _effect_preds(effect) -> set[str]:
-    """Predicates an effect adds or deletes (conditions of ``when`` aside)."""
-    out: set[str] = set()
-    if effect is None:
-        return out
-    if isinstance(effect, S.Atom):
-        out.add(effect.pred)
-    elif isinstance(effect, S.Not):
-        out |= _effect_preds(effect.arg)
-    elif isinstance(effect, S.And):
-        for e in effect.args:
-            out |= _effect_preds(e)
-    elif isinstance(effect, S.Forall | S.Timed):
-        out |= _effect_preds(effect.body)
-    elif isinstance(effect, S.When):
-        out |= _effect_preds(effect.effect)
-    return out
+    return pred not in _read(problem.goal)
 
 
 def _roots(domain: S.Domain) -> list:
@@ -178,20 +147,7 @@ def _roots(domain: S.Domain) -> list:
     out: list = [a.body for a in domain.axioms]
     for a in domain.actions:
         out.append(a.precondition)
-        out.extend(_when_conditions(a.effect))
-    return out
-
-
-def _when_conditions(effect) -> list:
-    out: list = []
-    if isinstance(effect, S.And):
-        for e in effect.args:
-            out.extend(_when_conditions(e))
-    elif isinstance(effect, S.Forall | S.Timed):
-        out.extend(_when_conditions(effect.body))
-    elif isinstance(effect, S.When):
-        out.append(effect.condition)
-        out.extend(_when_conditions(effect.effect))
+        out.extend(when_conditions(a.effect))
     return out
 
 
@@ -200,10 +156,8 @@ def _implications(domain: S.Domain, streams: S.StreamFile, problem: S.Problem) -
     atoms (over the pattern's variables) that hold wherever an atom of it does -- those every
     stream or rule certifying it requires or certifies with it, and that every fact of it
     the problem states comes with."""
-    changed = set()
-    for a in domain.actions:
-        changed |= _effect_preds(a.effect)
-    changed |= {ax.name for ax in domain.axioms}
+    changed = {ax.name for ax in domain.axioms}
+    changed |= {x.pred for a in domain.actions for x in changed_atoms(a.effect)}
     found: dict[str, tuple[S.Atom, set[S.Atom]]] = {}
     refused: set[str] = set()
     for block in (*streams.streams, *streams.rules):
@@ -222,7 +176,7 @@ def _implications(domain: S.Domain, streams: S.StreamFile, problem: S.Problem) -
             pattern = S.Atom(c.pred, tuple(S.Var(f"?{i}") for i in range(len(names))))
             rename = {n: S.Var(f"?{i}") for i, n in enumerate(names)}
             here = {
-                S.Atom(a.pred, tuple(rename[x.name] if isinstance(x, S.Var) else x for x in a.args))
+                substitute(a, rename)
                 for a in around
                 if a is not c
                 and a.pred != "="
@@ -237,14 +191,8 @@ def _implications(domain: S.Domain, streams: S.StreamFile, problem: S.Problem) -
         if fact.pred in found:
             pattern, implied = found[fact.pred]
             env = {v.name: x for v, x in zip(pattern.args, fact.args)}
-            implied.intersection_update({a for a in implied if _substitute(a, env) in init})
+            implied.intersection_update({a for a in implied if substitute(a, env) in init})
     return {p: v for p, v in found.items() if p not in refused and v[1]}
-
-
-def _substitute(atom: S.Atom, env: dict) -> S.Atom:
-    return S.Atom(
-        atom.pred, tuple(env.get(x.name, x) if isinstance(x, S.Var) else x for x in atom.args)
-    )
 
 
 def _closure(atoms, implied: dict) -> set[S.Atom]:
@@ -260,7 +208,7 @@ def _closure(atoms, implied: dict) -> set[S.Atom]:
             continue
         env = {v.name: x for v, x in zip(pattern.args, a.args)}
         for b in more:
-            b = _substitute(b, env)
+            b = substitute(b, env)
             if b not in out:
                 out.add(b)
                 todo.append(b)
@@ -278,7 +226,7 @@ def _guarded(pred: str, t: S.Stream, f, implied: dict, context: frozenset = froz
             return True
         cert = S.conjuncts(t.certified)[0]
         env = {v.name: a for v, a in zip(cert.args, f.args, strict=True)}
-        needed = [_substitute(a, env) for a in S.conjuncts(t.domain)]
+        needed = [substitute(a, env) for a in S.conjuncts(t.domain)]
         return all(a in context for a in needed)
     if isinstance(f, S.And):
         here = frozenset(
@@ -297,7 +245,7 @@ def _guarded(pred: str, t: S.Stream, f, implied: dict, context: frozenset = froz
         return _guarded(pred, t, f.body, implied, kept)
     if isinstance(f, S.Not | S.Or | S.Timed):
         return all(_guarded(pred, t, a, implied, context) for a in S.children(f))
-    return pred not in _preds(f)
+    return pred not in _read(f)
 
 
 def _mentions(atom: S.Atom, names: set[str]) -> bool:
@@ -344,3 +292,8 @@ def _complement(atom: S.Atom, turned) -> S.Atom:
     cert = S.conjuncts(t.certified)[0]
     by_var = {v.name: a for v, a in zip(cert.args, atom.args, strict=True)}
     return S.Atom(c, tuple(by_var[p.name] for p in t.inputs), span=atom.span)
+
+
+def _read(f) -> set[str]:
+    """The predicates of the atoms in ``f``."""
+    return {a.pred for a in atoms(f)}

@@ -39,7 +39,7 @@ def domain_signs(
     roots: list[S.Formula | None] = [problem.goal if problem is not None else None]
     for a in domain.actions:
         roots.append(a.precondition)
-        roots.extend(_conditions(a.effect))
+        roots.extend(when_conditions(a.effect))
     for root in roots:
         _signs(root, True, signs)
     if streams is not None:
@@ -64,17 +64,17 @@ def domain_signs(
     return signs
 
 
-def _conditions(effect) -> list:
+def when_conditions(effect) -> list:
     """The conditions of the conditional effects in ``effect``."""
     out: list = []
     if isinstance(effect, S.And):
         for e in effect.args:
-            out.extend(_conditions(e))
-    elif isinstance(effect, S.Forall):
-        out.extend(_conditions(effect.body))
+            out.extend(when_conditions(e))
+    elif isinstance(effect, S.Forall | S.Timed):
+        out.extend(when_conditions(effect.body))
     elif isinstance(effect, S.When):
         out.append(effect.condition)
-        out.extend(_conditions(effect.effect))
+        out.extend(when_conditions(effect.effect))
     return out
 
 
