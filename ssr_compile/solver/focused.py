@@ -79,9 +79,16 @@ class FocusedLoop(SolverLoop):
         self.kept_draws = None  # (:meth:`draw_kept_again`)
 
     def visible_results(self) -> list[Result]:
-        """The real results whose complexity is at most the level, and those inherited from
-        earlier calls (PDDLStream's complexity-bounded instantiation): an instance's k-th
-        value waits k - 1 levels past its inputs' before the planner sees it.  Otherwise the
+        """The real results whose complexity is at most the levels climbed (one at the first
+        level; counted from ``complexity_base``), and those inherited from earlier calls
+        (PDDLStream's complexity-bounded instantiation): an instance's k-th value waits k - 1
+        level rises past its inputs' before the planner sees it.  A first level set by hand
+        only bounds how deep optimistic instantiation goes: counted from level 1, a solve
+        that starts at level 3 (tamp2d) saw the first four draws of a placement a test had
+        just rejected, and each added configurations, motions and their costs to every later
+        problem (tamp2d's blocked problem, seed 8: 228 objects instead of 147).  A replanning
+        call that resumes at the level its last plan was found at counts from where the
+        search began (the policy passes its first level), as before.  Otherwise the
         values a failed stream plan drew (a redraw budget's worth) all reach the next
         optimistic problem at once, with every pair of them an optimistic test the planner
         then tries one planner call at a time.  A first draw is seen at once (k = 1): hiding
@@ -90,7 +97,7 @@ class FocusedLoop(SolverLoop):
         the stream plan that failed.  (Real facts stay at level 0 in instantiation: placing
         them at their complexity's level made the kitchen's stow, seed 1, take 137 planner
         calls and 27 cycles instead of 78 and 24.)"""
-        results, level = self.ev.results, self.level
+        results, level = self.ev.results, self.level - self.complexity_base + 1
         return results[: self.inherited] + [
             r for r in results[self.inherited :] if r.complexity <= level
         ]

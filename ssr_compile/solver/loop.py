@@ -65,6 +65,8 @@ class SolverLoop:
         }
         self.level = max(options.initial_level, 0)
         self.first_level = self.level
+        base = options.complexity_base
+        self.complexity_base = self.level if base is None else min(max(base, 0), self.level)
         self.best_failure = "no plan"
         self.last_compile = 0.0  # seconds the last optimistic problem took to compile
         accept_drawn = options.accept_drawn

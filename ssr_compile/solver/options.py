@@ -28,7 +28,11 @@ class SolveOptions:
     plan once, then plan again) or "adaptive" (a queue of plan skeletons sampled incrementally
     between planner calls: :mod:`ssr_compile.solver.adaptive`).  ``planner``: a backend name
     or object; ``time_limit`` in seconds; the levels from ``initial_level`` up to
-    ``max_level``; ``max_cost``: plans must cost less; ``defer``: deferred stream evaluation
+    ``max_level``; ``complexity_base``: the level from which the levels climbed are counted
+    for the draws the planner sees (:meth:`~ssr_compile.solver.focused.FocusedLoop.
+    visible_results`; ``None``: ``initial_level``; a call that resumes at the level an
+    earlier call climbed to passes the level that call began at); ``max_cost``: plans must
+    cost less; ``defer``: deferred stream evaluation
     (paper §VII, :func:`~ssr_compile.solver.deferral.reschedule_stream_plan`).
     Cost functions whose stream info gives a cost of at most ``eager_cost`` are evaluated as
     soon as their arguments are real (before planning), so the planner sees their real
@@ -86,6 +90,7 @@ class SolveOptions:
     planner: str | Any = "fd"
     time_limit: float = 60.0
     initial_level: int = 1
+    complexity_base: int | None = None
     max_level: int = 8
     max_cost: float = math.inf
     defer: bool = False
