@@ -418,15 +418,16 @@ class FocusedLoop(SolverLoop):
             self.problem, compiled, self.ev.results, self.ev.real_functions, later, mapping
         )
         try:
-            pre = plan_preimage(compiled.source_domain, real, bound)
             cost = plan_cost(compiled.source_domain, real, bound)
             planned = plan_cost(compiled.source_domain, compiled.source_problem, plan)
+            dearer = not cost <= planned + 1e-9
+            no_cheaper = self.incumbent is not None and cost >= self.incumbent.cost - 1e-9
+            if cost > self.max_cost or (no_cheaper and (dearer or answering)):
+                # of no use, valid or not: the preimage (the validity check) is not built (a
+                # plan drawn again before the answer mostly finds no cheaper binding)
+                return None
+            pre = plan_preimage(compiled.source_domain, real, bound)
         except (PlanInvalid, SSRError):
-            return None
-        if cost > self.max_cost:
-            return None
-        dearer = not cost <= planned + 1e-9
-        if dearer and self.incumbent is not None and cost >= self.incumbent.cost - 1e-9:
             return None
         drawn = self.finish(
             SOLVED,
