@@ -415,7 +415,6 @@ class _Policy:
         options = settings.solve_options(
             time_limit=limit,
             initial_level=first,
-            complexity_base=settings.initial_level,
             max_level=max_level,
             progress=self.progress,
             accept_drawn=accept_drawn,

@@ -92,6 +92,9 @@ class PolicySettings:
             "max_cost": self.max_cost,
             "defer": self.defer,
             "initial_level": self.initial_level,
+            # an attempt that resumes at the level of the last plan counts the draws it shows
+            # the planner from the episode's first level (SolveOptions.complexity_base)
+            "complexity_base": self.initial_level,
             "max_level": self.max_level,
             "resample": self.resample,
         }
