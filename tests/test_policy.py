@@ -6,6 +6,7 @@ assertions are exact on a fixed set of seeds.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 
@@ -549,3 +550,72 @@ def test_with_no_plan_the_robot_looks_again_before_it_gives_up():
         assert len(result.cycles) == fewer + 1 and not result.actions
     with pytest.raises(ValueError, match="max_looks"):
         PolicySettings(max_looks=-1)
+
+
+class _SlowFirstAgent(progress.ProgressAgent):
+    """Its streams take ``delay`` seconds a call for its first ``slow`` problems (a search
+    that runs past the attempt's limit), then answer at once."""
+
+    slow = 1
+    delay = 0.3
+    asked = 0
+
+    def problem(self):
+        import dataclasses
+        import time as _time
+
+        problem, module = super().problem()
+        self.asked += 1
+        if self.asked > self.slow:
+            return problem, module
+
+        def slowed(fn):
+            def call(*args):
+                _time.sleep(self.delay)
+                return fn(*args)
+
+            return call
+
+        streams = {name: slowed(fn) for name, fn in module.streams.items()}
+        return problem, dataclasses.replace(module, streams=streams)
+
+
+def _slow_first(settings: PolicySettings, slow: int = 1):
+    from ssr_compile.examples import load_example
+    from ssr_compile.resources import domains_dir
+
+    ex = load_example(domains_dir() / "progress")
+    world = _CountingWorld(0)
+    agent = _SlowFirstAgent(ex.domain, ex.streams, 0)
+    agent.slow = slow
+    return world, run_policy(Episode(world, agent, "slow-first"), settings)
+
+
+def test_an_unconstrained_attempt_out_of_its_own_time_looks_again_with_budget_left():
+    # Its own limit (0.5 s) ran out, not the budget: the robot observes again and plans
+    # afresh, as after "no plan", instead of ending the episode with the budget unused.
+    settings = PolicySettings(unconstrained_time=0.5, budget=30.0, max_cycles=10)
+    world, result = _slow_first(settings)
+    assert result.success, result.reason  # judged in the true world
+    first = result.cycles[0]
+    assert first.action is None and "looking again" in first.failure
+    assert "time limit of 0.5 s reached" in first.failure
+    assert world.observed == 2 + len(result.actions)  # the first observation, one look
+    # with no looks allowed the timeout ends it, as before
+    world, result = _slow_first(dataclasses.replace(settings, max_looks=0))
+    assert not result.success and result.reason.startswith("no plan: time limit of 0.5 s")
+    assert not result.actions and world.observed == 1
+
+
+def test_a_stream_running_when_the_budget_ends_is_the_budget_not_a_stream_fault():
+    # The last attempt's limit is what the budget had left; a stream call begun just before
+    # its end overruns it (and the grace): the budget ran out, the stream did not hang.
+    settings = PolicySettings(variant="neither", budget=0.5, max_cycles=10)
+    _SlowFirstAgent.delay = 2.0
+    try:
+        world, result = _slow_first(settings, slow=10)
+    finally:
+        _SlowFirstAgent.delay = 0.3
+    assert not result.success
+    assert result.reason == "no plan: planning budget exhausted"
+    assert "did not return" not in result.reason
