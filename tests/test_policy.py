@@ -619,3 +619,20 @@ def test_a_stream_running_when_the_budget_ends_is_the_budget_not_a_stream_fault(
     assert not result.success
     assert result.reason == "no plan: planning budget exhausted"
     assert "did not return" not in result.reason
+
+
+def test_a_stream_slow_at_the_end_of_an_unconstrained_attempt_is_no_hang():
+    # A call begun just before the attempt's limit (2 s, past the 1 s grace) is a slow stream,
+    # not one that never returns: the attempt timed out, the robot looks again and goes on.
+    # A stream that overruns the next attempt too ends the episode
+    # (test_a_stream_that_never_returns_ends_the_episode_naming_it).
+    settings = PolicySettings(unconstrained_time=0.5, budget=30.0, max_cycles=10)
+    _SlowFirstAgent.delay = 2.0
+    try:
+        world, result = _slow_first(settings)
+    finally:
+        _SlowFirstAgent.delay = 0.3
+    assert result.success, result.reason
+    first = result.cycles[0]
+    assert first.action is None and "looking again" in first.failure
+    assert re.search(r"stream '[a-z-]+' was running", first.failure)
