@@ -92,7 +92,8 @@ def _configure(p: argparse.ArgumentParser) -> None:
         type=_positive,
         default=300.0,
         metavar="S",
-        help="limit of each unconstrained planning attempt (default 300)",
+        help="limit of each unconstrained planning attempt (default 300); one out of time "
+        "with budget left looks again (--max-looks)",
     )
     p.add_argument(
         "--max-cycles", type=_count, default=100, metavar="N", help="at most N cycles (default 100)"
@@ -126,9 +127,10 @@ def _configure(p: argparse.ArgumentParser) -> None:
         type=_count,
         default=2,
         metavar="N",
-        help="when no plan is found, observe again without acting and replan, at most N "
-        "times in a row, before the episode ends (a first estimate can be far off; default "
-        "2; 0: end at once; never with --max-cost)",
+        help="when no plan is found (or an unconstrained attempt ran out of its own time "
+        "with budget left), observe again without acting and replan, at most N times in a "
+        "row, before the episode ends (a first estimate can be far off; default 2; 0: end "
+        "at once; never with --max-cost)",
     )
     p.add_argument(
         "--planner", metavar="NAME", help="planner backend (default fd, or example.toml's)"
