@@ -523,15 +523,22 @@ class _CountingWorld(progress.ProgressWorld):
         return super().observe()
 
 
-def _late_sight(max_looks: int):
+def _counted_episode(agent_class, settings: PolicySettings, **attributes):
+    """An episode of the progress example with ``agent_class`` (its ``attributes`` set) in a
+    world that counts its observations: the world and the result."""
     from ssr_compile.examples import load_example
     from ssr_compile.resources import domains_dir
 
     ex = load_example(domains_dir() / "progress")
     world = _CountingWorld(0)
-    episode = Episode(world, _LateSightAgent(ex.domain, ex.streams, 0), "late-sight")
-    result = run_policy(episode, PolicySettings(max_cycles=10, max_looks=max_looks))
-    return world, result
+    agent = agent_class(ex.domain, ex.streams, 0)
+    for name, value in attributes.items():
+        setattr(agent, name, value)
+    return world, run_policy(Episode(world, agent, agent_class.__name__), settings)
+
+
+def _late_sight(max_looks: int):
+    return _counted_episode(_LateSightAgent, PolicySettings(max_cycles=10, max_looks=max_looks))
 
 
 def test_with_no_plan_the_robot_looks_again_before_it_gives_up():
@@ -561,7 +568,6 @@ class _SlowFirstAgent(progress.ProgressAgent):
     asked = 0
 
     def problem(self):
-        import dataclasses
         import time as _time
 
         problem, module = super().problem()
@@ -580,15 +586,8 @@ class _SlowFirstAgent(progress.ProgressAgent):
         return problem, dataclasses.replace(module, streams=streams)
 
 
-def _slow_first(settings: PolicySettings, slow: int = 1):
-    from ssr_compile.examples import load_example
-    from ssr_compile.resources import domains_dir
-
-    ex = load_example(domains_dir() / "progress")
-    world = _CountingWorld(0)
-    agent = _SlowFirstAgent(ex.domain, ex.streams, 0)
-    agent.slow = slow
-    return world, run_policy(Episode(world, agent, "slow-first"), settings)
+def _slow_first(settings: PolicySettings, slow: int = 1, delay: float = 0.3):
+    return _counted_episode(_SlowFirstAgent, settings, slow=slow, delay=delay)
 
 
 def test_an_unconstrained_attempt_out_of_its_own_time_looks_again_with_budget_left():
@@ -611,11 +610,7 @@ def test_a_stream_running_when_the_budget_ends_is_the_budget_not_a_stream_fault(
     # The last attempt's limit is what the budget had left; a stream call begun just before
     # its end overruns it (and the grace): the budget ran out, the stream did not hang.
     settings = PolicySettings(variant="neither", budget=0.5, max_cycles=10)
-    _SlowFirstAgent.delay = 2.0
-    try:
-        world, result = _slow_first(settings, slow=10)
-    finally:
-        _SlowFirstAgent.delay = 0.3
+    world, result = _slow_first(settings, slow=10, delay=2.0)
     assert not result.success
     assert result.reason == "no plan: planning budget exhausted"
     assert "did not return" not in result.reason
@@ -627,11 +622,7 @@ def test_a_stream_slow_at_the_end_of_an_unconstrained_attempt_is_no_hang():
     # A stream that overruns the next attempt too ends the episode
     # (test_a_stream_that_never_returns_ends_the_episode_naming_it).
     settings = PolicySettings(unconstrained_time=0.5, budget=30.0, max_cycles=10)
-    _SlowFirstAgent.delay = 2.0
-    try:
-        world, result = _slow_first(settings)
-    finally:
-        _SlowFirstAgent.delay = 0.3
+    world, result = _slow_first(settings, delay=2.0)
     assert result.success, result.reason
     first = result.cycles[0]
     assert first.action is None and "looking again" in first.failure
