@@ -27,7 +27,7 @@ from ssr_compile.belief.observation import (
 )
 from ssr_compile.belief.particles import PoseBelief
 
-from .kitchen_motion import same_conf
+from .kitchen_motion import conf_key, same_conf
 
 BELIEF = BeliefParameters()  # paper §V: eps, delta, c, c', p_FN and noise (the library's)
 MODEL, EPS, DELTA = BELIEF.model, BELIEF.eps, BELIEF.delta
@@ -144,11 +144,20 @@ class BeliefStreams:
     def test_afree(self, bq, aq, o2: str, pb2: PoseBelief) -> bool:
         """The robot at base ``bq`` with its arm at ``aq`` is clear of ``o2`` where the belief
         ``pb2`` puts it (a localized belief, at its estimate; another is no obstacle, as for
-        :meth:`plan_arm_motion`).  The configuration the arm is in now is clear: it is there."""
-        if not is_localized(pb2) or (self.arm_now is not None and same_conf(aq, self.arm_now)):
+        :meth:`plan_arm_motion`).  The configuration the arm is in now is clear: it is there.
+        A reach's approach is clear of ``o2`` with the object the hand carries along it
+        (:meth:`_note_carry`): the pick that draws it back, or the place that brings it in,
+        does not sweep it through ``o2``."""
+        if not is_localized(pb2):
             return True
+        p2 = self.obj_pose(pb2)
         with self.planning():
-            return self.ks.test_cfree_traj_pose(bq, (aq,), o2, self.obj_pose(pb2))
+            for o, g, path in self._carries.get((tuple(bq), conf_key(aq)), ()):
+                if o != o2 and not self._carried_clear(bq, path[:-1], o, g, o2, p2):
+                    return False
+            if self.arm_now is not None and same_conf(aq, self.arm_now):
+                return True
+            return self.ks.test_cfree_traj_pose(bq, (aq,), o2, p2)
 
     def obscost(self, o: str, pb: PoseBelief, obs: Observation) -> float | None:
         if not o == pb.obj == obs.obj:

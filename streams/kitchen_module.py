@@ -42,7 +42,7 @@ from ssr_compile.belief.particles import PoseBelief
 from ssr_compile.stream import StreamInfo, StreamsModule
 
 from .kitchen_belief import C_DETECT, BeliefStreams
-from .kitchen_motion import ArmConf, MotionStreams
+from .kitchen_motion import ArmConf, MotionStreams, conf_key
 
 # A placement this close (m, rad) to one the true world refused is not proposed again.
 REFUSED_NEAR = (0.02, 0.2)
@@ -92,6 +92,9 @@ class KitchenModule(MotionStreams, BeliefStreams):
         # the drawer openings each reach configuration was computed under (see
         # :meth:`_openings_at`), by its joint values
         self._reach_openings: dict[tuple, dict[str, float]] = {}
+        # what the hand carries along each reach's approach (see :meth:`_note_carry`), by base
+        # and the reach's joint values: (object, grasp, approach path)
+        self._carries: dict[tuple, list[tuple[str, Grasp, tuple]]] = {}
 
     # -- planning state -------------------------------------------------------------------
     def _canonical_frame(self, surface: str):
@@ -257,7 +260,50 @@ class KitchenModule(MotionStreams, BeliefStreams):
                 w.set_arm(res[0])
                 if w.robot_collision():
                     return None
-        return self._snap(None if res is None else tuple(res[1]), start)
+        path = self._snap(None if res is None else tuple(res[1]), start)
+        if path is not None and start is None:
+            self._note_carry(o, g, bq, path)
+        elif path is not None and self._carry_hits(o, g, bq, path):
+            return None
+        return path
+
+    def _note_carry(self, o: str, g: Grasp, bq, path) -> None:
+        """The approach ``path`` of a reach of ``o`` with ``g`` is swept with ``o`` in the hand:
+        picking draws it back along the path, placing brings it in.  The path is checked with
+        the hand alone (picking) or with no other object in the scene, and the object is wider
+        than the hand: the clutter family's cook N = 10, seed 0 drew the cracker box back
+        through the block beside the hand's way, and every arm motion from there stopped at its
+        first waypoint (nine cycles, 304 s).  :meth:`test_afree` checks the sweep against the
+        objects where they are when the plan picks or places."""
+        found = self._carries.setdefault((tuple(bq), conf_key(path[0])), [])
+        if all(c[2] != path for c in found):
+            found.append((o, g, tuple(path)))
+
+    def _carried_clear(self, bq, traj, o: str, g: Grasp, o2: str, p2) -> bool:
+        """Inside :meth:`planning`: ``o`` held with ``g``, carried along the arm trajectory at
+        base ``bq``, avoids ``o2`` at ``p2`` (the hand itself: ``test_cfree_traj_pose``)."""
+        w = self.world
+        with w.saved():
+            w.place_object(o2, p2.surface, p2.rel)
+            w.grab(o, g.pose)
+            w.set_base(bq)
+            for q in traj:
+                w.set_arm(q)
+                if w._pair(w.objects[o], w.objects[o2]):
+                    return False
+        return True
+
+    def _carry_hits(self, o: str, g: Grasp, bq, path) -> bool:
+        """A reach from the configuration the arm is in now (``inv-kin-from``) picks ``o``
+        from here, the other objects where they are: its approach, carrying ``o``, meets one
+        of them.  (A reach the arm is not in yet is checked where the plan takes it, by
+        :meth:`test_afree`; this one starts from a configuration other reaches share.)"""
+        with self.planning():
+            for o2, pb2 in self.obstacles.items():
+                p2 = self.obj_pose(pb2)
+                if o2 != o and not self._carried_clear(bq, path[:-1], o, g, o2, p2):
+                    return True
+        return False
 
     def inv_kin(self, o: str, pb: PoseBelief, g: Grasp, bq):
         path = self._kin(o, pb, g, bq)

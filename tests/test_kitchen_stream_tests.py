@@ -81,9 +81,19 @@ def test_cfree_refuses_a_placement_on_top_of_another_object(cook):
     assert module.streams["test-cfree"]("block", on_it, "block", on_it) is True
 
 
+_REACHES: dict[int, tuple] = {}
+
+
 def _block_pregrasp(task, module):
     """A base and a pre-grasp configuration for the block, from the streams (12 draws of
-    bases per grasp)."""
+    bases per grasp); the same for every test of one module (the draws move its random
+    numbers on, and later tests rely on the first reach's geometry)."""
+    if id(module) not in _REACHES:
+        _REACHES[id(module)] = _draw_pregrasp(task, module)
+    return _REACHES[id(module)]
+
+
+def _draw_pregrasp(task, module):
     block = _point(task, "block")
     for (g,) in module.streams["sample-grasp"]("block"):
         bases = module.streams["inv-reach"]("block", block, g)
@@ -98,7 +108,8 @@ def _block_pregrasp(task, module):
 def test_afree_refuses_an_arm_configuration_inside_another_object(cook):
     """``test-afree`` (so ``armblocked``, in pick and place): the pre-grasp of the block is
     refused with the sugar box believed where the hand would be, and allowed with the box
-    elsewhere or with the arm already there (the robot is at that configuration: it is free)."""
+    elsewhere, or with the arm already there and the box against the hand only (the robot is
+    at that configuration: its hand is free)."""
     task, module = cook
     bq, aq = _block_pregrasp(task, module)
     hand = task.world.robot.forward_kinematics(bq, aq)[0]
@@ -107,11 +118,54 @@ def test_afree_refuses_an_arm_configuration_inside_another_object(cook):
     assert test(bq, aq, "sugar_box", sugar_at_hand) is False
     sugar = _point(task, "sugar_box", (hand[0], hand[1] + 0.6))
     assert test(bq, aq, "sugar_box", sugar) is True
-    module.module.arm_now = tuple(aq)
+    # where the hand is, the footprints of the box and of the block apart (so the block the
+    # pick draws back up its approach passes the box: the next test)
+    km = module.module
+    apart = _radius(task, "block") + _radius(task, "sugar_box") + 0.01
+    block_xy = np.asarray(task.world.object_pose("block")[0][:2])
+    against_hand = []
+    for a in np.linspace(0, 2 * np.pi, 16, endpoint=False):
+        box = _point(task, "sugar_box", tuple(block_xy + apart * np.array([np.cos(a), np.sin(a)])))
+        with km.planning():
+            if not km.ks.test_cfree_traj_pose(bq, (aq,), "sugar_box", km.obj_pose(box)):
+                against_hand.append(box)
+    assert against_hand, "no belief of the box against the hand and apart from the block"
+    assert all(test(bq, aq, "sugar_box", box) is False for box in against_hand)
+    km.arm_now = tuple(aq)
     try:
-        assert test(bq, aq, "sugar_box", sugar_at_hand) is True
+        assert all(test(bq, aq, "sugar_box", box) is True for box in against_hand)
     finally:
-        module.module.arm_now = None
+        km.arm_now = None
+
+
+def _radius(task, name: str) -> float:
+    he = task.world.half_extents[name]
+    return float(np.hypot(he[0], he[1]))
+
+
+def test_afree_refuses_a_reach_whose_approach_carries_the_object_into_another(cook):
+    """A pick draws the object back along its approach (placing brings it in), unchecked by
+    the true world; the approach was checked with the hand alone.  ``test-afree`` checks the
+    object carried along it: with the arm at the pre-grasp (the hand free there), a box
+    believed across the block's way is refused, and one beside it is not.  The clutter
+    family's cook N = 10, seed 0 drew the cracker box back through a block beside the hand's
+    way, and every arm motion from there stopped at its first waypoint (nine cycles)."""
+    task, module = cook
+    km = module.module
+    bq, aq = _block_pregrasp(task, module)
+    block_xy = np.asarray(task.world.object_pose("block")[0][:2])
+    test = module.streams["test-afree"]
+    km.arm_now = tuple(aq)  # the hand is free where it is: only what it carries is checked
+    try:
+        for a in np.linspace(0, 2 * np.pi, 8, endpoint=False):
+            u = np.array([np.cos(a), np.sin(a)])
+            across = _point(task, "sugar_box", tuple(block_xy + 0.5 * _radius(task, "block") * u))
+            assert test(bq, aq, "sugar_box", across) is False
+            apart = _radius(task, "block") + _radius(task, "sugar_box") + 0.01
+            beside = _point(task, "sugar_box", tuple(block_xy + apart * u))
+            assert test(bq, aq, "sugar_box", beside) is True
+    finally:
+        km.arm_now = None
 
 
 def test_an_arm_motion_from_carry_to_a_grasp_is_planned_for_after_the_held_object_is_down(
