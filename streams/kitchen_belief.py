@@ -152,8 +152,8 @@ class BeliefStreams:
             return True
         p2 = self.obj_pose(pb2)
         with self.planning():
-            for o, g, path in self._carries.get((tuple(bq), conf_key(aq)), ()):
-                if o != o2 and not self._carried_clear(bq, path[:-1], o, g, o2, p2):
+            for c in self._carries.get((tuple(bq), conf_key(aq)), ()):
+                if not self._carry_clear(c, o2, p2):
                     return False
             if self.arm_now is not None and same_conf(aq, self.arm_now):
                 return True

@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 
 import numpy as np
 from ssr_compile.sim.actions import Action, DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
@@ -52,6 +53,19 @@ SNAP = 0.05  # rad: a path starting this close to the robot's arm configuration 
 # Draws of sample-placement that may land on an object the robot localized before one is
 # yielded anyway (:meth:`KitchenModule.sample_placement`).
 CLEAR_TRIES = 10
+
+
+@dataclass(frozen=True)
+class Carry:
+    """An object the hand carries along a reach's approach (:meth:`KitchenModule._note_carry`):
+    held with ``grasp`` along ``path`` at ``base``; ``centers``: where it is at each
+    configuration but the last (the grasp, where it rests)."""
+
+    obj: str
+    grasp: Grasp
+    base: tuple
+    path: tuple
+    centers: np.ndarray = field(compare=False)
 
 
 class KitchenModule(MotionStreams, BeliefStreams):
@@ -94,7 +108,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         self._reach_openings: dict[tuple, dict[str, float]] = {}
         # what the hand carries along each reach's approach (see :meth:`_note_carry`), by base
         # and the reach's joint values: (object, grasp, approach path)
-        self._carries: dict[tuple, list[tuple[str, Grasp, tuple]]] = {}
+        self._carries: dict[tuple, list[Carry]] = {}
 
     # -- planning state -------------------------------------------------------------------
     def _canonical_frame(self, surface: str):
@@ -276,20 +290,38 @@ class KitchenModule(MotionStreams, BeliefStreams):
         first waypoint (nine cycles, 304 s).  :meth:`test_afree` checks the sweep against the
         objects where they are when the plan picks or places."""
         found = self._carries.setdefault((tuple(bq), conf_key(path[0])), [])
-        if all(c[2] != path for c in found):
-            found.append((o, g, tuple(path)))
+        if all(c.path != path for c in found):
+            found.append(self._carry(o, g, bq, tuple(path)))
 
-    def _carried_clear(self, bq, traj, o: str, g: Grasp, o2: str, p2) -> bool:
-        """Inside :meth:`planning`: ``o`` held with ``g``, carried along the arm trajectory at
-        base ``bq``, avoids ``o2`` at ``p2`` (the hand itself: ``test_cfree_traj_pose``)."""
+    def _carry(self, o: str, g: Grasp, bq, path: tuple) -> Carry:
+        """``o`` held with ``g`` along ``path`` at base ``bq``, and where it is on the way."""
         w = self.world
-        with w.saved():
-            w.place_object(o2, p2.surface, p2.rel)
+        with self.planning():
             w.grab(o, g.pose)
             w.set_base(bq)
-            for q in traj:
+            centers = []
+            for q in path[:-1]:  # at the grasp itself the object rests where it stood
                 w.set_arm(q)
-                if w._pair(w.objects[o], w.objects[o2]):
+                centers.append(w.object_pose(o)[0])
+        return Carry(o, g, tuple(bq), path, np.asarray(centers, float))
+
+    def _carry_clear(self, c: Carry, o2: str, p2) -> bool:
+        """Inside :meth:`planning`: the carry ``c`` avoids ``o2`` at ``p2`` (the collision
+        query only where the two objects' bounding spheres meet on the way)."""
+        if c.obj == o2 or len(c.centers) == 0:
+            return True
+        w = self.world
+        x2 = np.asarray(multiply(w.surface_frame(p2.surface), p2.rel)[0], float)
+        apart = float(np.linalg.norm(w.half_extents[c.obj]) + np.linalg.norm(w.half_extents[o2]))
+        if float(np.min(np.linalg.norm(c.centers - x2, axis=1))) > apart:
+            return True
+        with w.saved():
+            w.place_object(o2, p2.surface, p2.rel)
+            w.grab(c.obj, c.grasp.pose)
+            w.set_base(c.base)
+            for q in c.path[:-1]:
+                w.set_arm(q)
+                if w._pair(w.objects[c.obj], w.objects[o2]):
                     return False
         return True
 
@@ -298,12 +330,12 @@ class KitchenModule(MotionStreams, BeliefStreams):
         from here, the other objects where they are: its approach, carrying ``o``, meets one
         of them.  (A reach the arm is not in yet is checked where the plan takes it, by
         :meth:`test_afree`; this one starts from a configuration other reaches share.)"""
+        c = self._carry(o, g, bq, tuple(path))
         with self.planning():
-            for o2, pb2 in self.obstacles.items():
-                p2 = self.obj_pose(pb2)
-                if o2 != o and not self._carried_clear(bq, path[:-1], o, g, o2, p2):
-                    return True
-        return False
+            return any(
+                not self._carry_clear(c, o2, self.obj_pose(pb2))
+                for o2, pb2 in self.obstacles.items()
+            )
 
     def inv_kin(self, o: str, pb: PoseBelief, g: Grasp, bq):
         path = self._kin(o, pb, g, bq)
