@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from ssr_compile.sim.geometry import yaw_of
+from ssr_compile.sim.geometry import multiply, yaw_of
 from ssr_compile.sim.perception import is_visible
 from ssr_compile.sim.tasks import make_task
 from ssr_compile.streams.kitchen_module import make_module
@@ -143,27 +143,45 @@ def _radius(task, name: str) -> float:
     return float(np.hypot(he[0], he[1]))
 
 
+def _side_reach(task, module):
+    """A base and pre-grasp of the sugar box with a side grasp, and the direction (unit, on
+    the counter) its pick draws it back in."""
+    box = _point(task, "sugar_box")
+    rest = np.asarray(task.world.object_pose("sugar_box")[0][:2])
+    fk = task.world.robot.forward_kinematics
+    for (g,) in module.streams["sample-grasp"]("sugar_box"):
+        if g.kind != "side":
+            continue
+        bases = module.streams["inv-reach"]("sugar_box", box, g)
+        for _ in range(12):
+            (bq,) = next(bases) or (None,)
+            out = None if bq is None else module.streams["inv-kin"]("sugar_box", box, g, bq)
+            if out is not None:
+                away = np.asarray(multiply(fk(bq, out[0]), g.pose)[0][:2]) - rest
+                return bq, out[0], away / np.linalg.norm(away)
+    pytest.fail("no side grasp of the sugar box reached in 12 draws of bases per grasp")
+
+
 def test_afree_refuses_a_reach_whose_approach_carries_the_object_into_another(cook):
     """A pick draws the object back along its approach (placing brings it in), unchecked by
     the true world; the approach was checked with the hand alone.  ``test-afree`` checks the
-    object carried along it: with the arm at the pre-grasp (the hand free there), a box
-    believed across the block's way is refused, and one beside it is not.  The clutter
-    family's cook N = 10, seed 0 drew the cracker box back through a block beside the hand's
-    way, and every arm motion from there stopped at its first waypoint (nine cycles)."""
-    task, module = cook
+    object carried along it: with the arm at the pre-grasp (the hand free there), the block
+    believed where the sugar box is drawn back to is refused, and beside its way it is not.
+    The clutter family's cook N = 10, seed 0 drew the cracker box back through a block beside
+    the hand's way, and every arm motion from there stopped at its first waypoint (nine
+    cycles)."""
+    task, _ = cook
+    module = make_module(task, np.random.default_rng(1))  # the fixture's draws left as they are
     km = module.module
-    bq, aq = _block_pregrasp(task, module)
-    block_xy = np.asarray(task.world.object_pose("block")[0][:2])
+    bq, aq, away = _side_reach(task, module)
+    rest = np.asarray(task.world.object_pose("sugar_box")[0][:2])
+    apart = _radius(task, "sugar_box") + _radius(task, "block") + 0.005
+    side = np.array([-away[1], away[0]])
     test = module.streams["test-afree"]
     km.arm_now = tuple(aq)  # the hand is free where it is: only what it carries is checked
     try:
-        for a in np.linspace(0, 2 * np.pi, 8, endpoint=False):
-            u = np.array([np.cos(a), np.sin(a)])
-            across = _point(task, "sugar_box", tuple(block_xy + 0.5 * _radius(task, "block") * u))
-            assert test(bq, aq, "sugar_box", across) is False
-            apart = _radius(task, "block") + _radius(task, "sugar_box") + 0.01
-            beside = _point(task, "sugar_box", tuple(block_xy + apart * u))
-            assert test(bq, aq, "sugar_box", beside) is True
+        assert test(bq, aq, "block", _point(task, "block", tuple(rest + apart * away))) is False
+        assert test(bq, aq, "block", _point(task, "block", tuple(rest + apart * side))) is True
     finally:
         km.arm_now = None
 
