@@ -107,7 +107,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         # :meth:`_openings_at`), by its joint values
         self._reach_openings: dict[tuple, dict[str, float]] = {}
         # what the hand carries along each reach's approach (see :meth:`_note_carry`), by base
-        # and the reach's joint values: (object, grasp, approach path)
+        # and the reach's joint values: a :class:`Carry` each
         self._carries: dict[tuple, list[Carry]] = {}
 
     # -- planning state -------------------------------------------------------------------
