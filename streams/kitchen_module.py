@@ -294,15 +294,10 @@ class KitchenModule(MotionStreams, BeliefStreams):
             found.append(self._carry(o, g, bq, tuple(path)))
 
     def _carry(self, o: str, g: Grasp, bq, path: tuple) -> Carry:
-        """``o`` held with ``g`` along ``path`` at base ``bq``, and where it is on the way."""
-        w = self.world
-        with self.planning():
-            w.grab(o, g.pose)
-            w.set_base(bq)
-            centers = []
-            for q in path[:-1]:  # at the grasp itself the object rests where it stood
-                w.set_arm(q)
-                centers.append(w.object_pose(o)[0])
+        """``o`` held with ``g`` along ``path`` at base ``bq``, and where it is on the way (by
+        forward kinematics; at the grasp itself the object rests where it stood)."""
+        fk = self.world.robot.forward_kinematics
+        centers = [multiply(fk(bq, q), g.pose)[0] for q in path[:-1]]
         return Carry(o, g, tuple(bq), path, np.asarray(centers, float))
 
     def _carry_clear(self, c: Carry, o2: str, p2) -> bool:
