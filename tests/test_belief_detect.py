@@ -404,6 +404,25 @@ def test_focused_detects_directly_when_clear(planner):
     assert sol.cost == pytest.approx(4.05, abs=0.01)
 
 
+def test_a_kept_plan_drawn_again_at_the_same_cost_is_drawn_no_more():
+    # fd:opt keeps the clear problem's plan (it holds, dearer than planned) and draws its stream
+    # plan again before answering.  The detection costs the same for every observation of a
+    # target nothing hides: the first draw again gives the very same cost, and the solver stops
+    # there instead of drawing until three draws in a row found nothing cheaper.
+    from ssr_compile.solver import SolveOptions, solve
+
+    said = []
+    sol = solve(load("domain.pddl"), load("stream.pddl"), load("problem-clear.pddl"),
+                bd.make_module(0),
+                SolveOptions(planner="fd:opt", initial_level=3, time_limit=30,
+                             progress=said.append))  # fmt: skip
+    assert sol.solved and sol.cost == pytest.approx(4.05, abs=0.01)
+    again = [x for x in said if "drawing the kept plan's stream plan again" in x]
+    assert len(again) == 1
+    assert any("the same cost with the values drawn again" in x for x in said)
+    assert sol.stats.streams["sample-obs"].calls == 2  # the plan's draw and one again
+
+
 def test_cli_solve_reads_example_toml(capsys):
     from ssr_compile.cli import main
 

@@ -14,14 +14,15 @@ from ..errors import UnsupportedError
 from .base import SOLVED, UNSOLVABLE, GroundAction, over_bound
 
 
-def plan_cost(domain: S.Domain, problem: S.Problem, actions: list[GroundAction]) -> float:
+def plan_cost(
+    domain: S.Domain, problem: S.Problem, actions: list[GroundAction], values: dict | None = None
+) -> float:
+    """``values``: the problem's numeric values when the caller has them already
+    (:func:`value_table`), instead of reading them from ``problem.init``."""
     if problem.metric is None:
         return len(actions)
-    values = {
-        (v.fluent.name, tuple(a.name for a in v.fluent.args)): v.value.value
-        for v in problem.init
-        if isinstance(v, S.InitValue)
-    }
+    if values is None:
+        values = value_table(v for v in problem.init if isinstance(v, S.InitValue))
     by_name = {a.name: a for a in domain.actions}
     total: float = 0
     for name, args in actions:
@@ -32,6 +33,16 @@ def plan_cost(domain: S.Domain, problem: S.Problem, actions: list[GroundAction])
         for e in cost_effects(action.effect):
             total += _value(e.value, binding, values)
     return total
+
+
+def value_table(values) -> dict:
+    """Numeric values (``S.InitValue``s, or ``(FuncTerm, number)`` pairs) as
+    :func:`plan_cost` reads them: by function name and argument names."""
+    table = {}
+    for v in values:
+        term, x = (v.fluent, v.value.value) if isinstance(v, S.InitValue) else v
+        table[(term.name, tuple(a.name for a in term.args))] = x
+    return table
 
 
 def fractional_costs(domain: S.Domain, problem: S.Problem) -> list[str]:

@@ -268,17 +268,11 @@ def bound_result(r: Result, mapping: dict[str, str]) -> Result:
     )
 
 
-def real_problem(problem, compiled, results, real_functions, later, mapping) -> S.Problem:
-    """The problem a plan bound to drawn values (``mapping``: optimistic -> real) is checked in:
-    the problem's facts and those of the real ``results``; with deferred results (``later``),
-    their facts and optimistic cost terms over the values drawn for their inputs (paper §VII);
-    the problem's numeric values and the real function values over those."""
-    facts = {f for f in problem.init if isinstance(f, S.Atom)}
-    for r in results:
-        facts.update(r.certified)
+def real_terms(problem, compiled, real_functions, later, mapping) -> dict[S.FuncTerm, float]:
+    """The numeric values of :func:`real_problem`: the problem's, the real function values, and
+    with deferred results (``later``) the optimistic cost terms over the values drawn for their
+    inputs (paper §VII)."""
     terms: dict[S.FuncTerm, float] = {}
-    for r in later:
-        facts.update(renamed(a, mapping) for a in r.certified)
     if later:
         for v in compiled.source_problem.init:
             if isinstance(v, S.InitValue):
@@ -287,5 +281,43 @@ def real_problem(problem, compiled, results, real_functions, later, mapping) -> 
         if isinstance(v, S.InitValue):
             terms[v.fluent] = v.value.value
     terms.update(real_functions)
+    return terms
+
+
+class RealValues:
+    """The numeric values of :func:`real_terms` without deferred results, as
+    :func:`~ssr_compile.planners.costs.plan_cost` reads them (by function name and argument
+    names), looked up where they are instead of copied: a plan's cost reads a few of them,
+    and a solve prices many plans over a growing set of real function values."""
+
+    def __init__(self, problem: S.Problem, real_functions: dict[S.FuncTerm, float]):
+        self.real_functions = real_functions
+        self.initial = {v.fluent: v.value.value for v in problem.init if isinstance(v, S.InitValue)}
+
+    def _term(self, key) -> S.FuncTerm:
+        return S.FuncTerm(key[0], tuple(S.Const(a) for a in key[1]))
+
+    def __contains__(self, key) -> bool:
+        term = self._term(key)
+        return term in self.real_functions or term in self.initial
+
+    def __getitem__(self, key) -> float:
+        term = self._term(key)
+        if term in self.real_functions:
+            return self.real_functions[term]
+        return self.initial[term]
+
+
+def real_problem(problem, compiled, results, real_functions, later, mapping, terms=None):
+    """The problem a plan bound to drawn values (``mapping``: optimistic -> real) is checked in:
+    the problem's facts and those of the real ``results``; with deferred results (``later``),
+    their facts; the numeric values of :func:`real_terms` (``terms``, when computed already)."""
+    facts = {f for f in problem.init if isinstance(f, S.Atom)}
+    for r in results:
+        facts.update(r.certified)
+    for r in later:
+        facts.update(renamed(a, mapping) for a in r.certified)
+    if terms is None:
+        terms = real_terms(problem, compiled, real_functions, later, mapping)
     values = tuple(S.InitValue(t, S.Num(x)) for t, x in terms.items())
     return replace(compiled.source_problem, init=tuple(sorted(facts, key=str)) + values)

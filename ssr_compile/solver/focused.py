@@ -22,11 +22,12 @@ import math
 import time
 from dataclasses import replace
 
+from .. import syntax as S
 from ..compile.instantiate import Result, real_instances
 from ..errors import InstanceCapReached, PlannerFailure, SSRError
 from ..planners.base import UNSOLVABLE
-from ..planners.costs import plan_cost
-from .evaluation import bound_result, real_problem
+from ..planners.costs import plan_cost, value_table
+from .evaluation import RealValues, bound_result, real_problem, real_terms
 from .loop import SolverLoop
 from .plan_evaluation import DrawMemory, StreamPlanEvaluation
 from .preimage import PlanInvalid, plan_preimage
@@ -48,6 +49,10 @@ SIBLINGS = 100
 # REBIND_MOST draws (:meth:`FocusedLoop.draw_kept_again`; ``SolveOptions.rebind``)
 REBIND = 3
 REBIND_MOST = 20
+
+
+def same_cost(a: float, b: float) -> bool:
+    return abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))
 
 
 class FocusedLoop(SolverLoop):
@@ -77,6 +82,9 @@ class FocusedLoop(SolverLoop):
             rebind = REBIND if getattr(self.backend.capabilities, "optimal", False) else 0
         self.rebind_draws = max(int(rebind), 0)
         self.kept_draws = None  # (:meth:`draw_kept_again`)
+        self.last_bound_cost: float | None = None  # (:meth:`bound_solution`)
+        self._planned_values: tuple = (None, {})  # (:meth:`planned_values`)
+        self._real_values: RealValues | None = None  # (:meth:`bound_solution`)
 
     def visible_results(self) -> list[Result]:
         """The real results whose complexity is at most the levels climbed (one at the first
@@ -190,7 +198,7 @@ class FocusedLoop(SolverLoop):
         kept, self.kept_draws = self.kept_draws, None
         if kept is None or self.rebind_draws <= 0 or self.incumbent is None:
             return
-        compiled, plan, inst, ordered, later = kept
+        compiled, plan, inst, ordered, later, kept_cost = kept
         idle = 0
         for _ in range(REBIND_MOST):
             if time.monotonic() >= self.deadline or idle >= self.rebind_draws:
@@ -204,6 +212,7 @@ class FocusedLoop(SolverLoop):
             if not evaluation.run() or not evaluation.ok:
                 continue
             best = self.incumbent
+            self.last_bound_cost = None
             found = self.bound_solution(
                 compiled, plan, inst, evaluation.binding, later, answering=True
             )
@@ -211,6 +220,12 @@ class FocusedLoop(SolverLoop):
                 self.incumbent = found
             if self.incumbent is not best:
                 idle = 0
+            elif self.last_bound_cost is not None and same_cost(self.last_bound_cost, kept_cost):
+                # new values, the very same cost: the cost does not depend on the values
+                # this stream plan draws (belief-detect's clear problem: the detection's
+                # cost is the same for every observation of a target nothing hides)
+                self.say("  the same cost with the values drawn again: no cheaper binding")
+                return
 
     def plan(self, compiled):
         """The backend's answer on the compiled problem (within the time left and the cost
@@ -316,7 +331,9 @@ class FocusedLoop(SolverLoop):
             # The planner planned with unit costs (its cost counts the compiled task's
             # actions): the plan's cost is the metric's, over the values as planned -- the
             # one the incumbent's is compared with, and the one reported.
-            cost = plan_cost(compiled.source_domain, compiled.source_problem, plan)
+            cost = plan_cost(
+                compiled.source_domain, compiled.source_problem, plan, self.planned_values(compiled)
+            )
         if self.incumbent is not None and cost >= self.incumbent.cost - 1e-9:
             # Optimistic costs are lower bounds: this plan costs at least what the incumbent
             # costs.  (A suboptimal planner, asked again after a stream plan that all
@@ -361,7 +378,8 @@ class FocusedLoop(SolverLoop):
             elif self.incumbent is not kept and self.rebind_draws > 0:
                 # held dearer than planned, and kept: its stream plan may be drawn again at
                 # the end (:meth:`finish_incumbent`)
-                self.kept_draws = (compiled, plan, inst, ordered, later)
+                cost = self.incumbent.cost
+                self.kept_draws = (compiled, plan, inst, ordered, later, cost)
         return None
 
     def test_siblings(self, failed) -> None:
@@ -395,6 +413,15 @@ class FocusedLoop(SolverLoop):
             if count:
                 self.say(f"  {count} more {inst.stream} over the same objects' other values")
 
+    def planned_values(self, compiled) -> dict:
+        """The numeric values of the optimistic problem ``compiled`` (:func:`value_table`),
+        read once per problem."""
+        if self._planned_values[0] is not compiled:
+            init = compiled.source_problem.init
+            table = value_table(v for v in init if isinstance(v, S.InitValue))
+            self._planned_values = (compiled, table)
+        return self._planned_values[1]
+
     def bound_solution(
         self, compiled, plan, inst, binding, later=(), answering=False
     ) -> Solution | None:
@@ -414,19 +441,39 @@ class FocusedLoop(SolverLoop):
         if any(a in inst.objects and a not in deferred_objs for _, args in bound for a in args):
             return None
         mapping = {o: v for o, v in binding.items() if isinstance(v, str)}
-        real = real_problem(
-            self.problem, compiled, self.ev.results, self.ev.real_functions, later, mapping
-        )
+        # the cost first, from the numeric values alone: the real problem (every fact,
+        # sorted) is built only for a plan that may be the answer
+        terms = None
+        if later:
+            terms = real_terms(self.problem, compiled, self.ev.real_functions, later, mapping)
+            values = value_table(terms.items())
+        else:
+            if self._real_values is None:
+                self._real_values = RealValues(self.problem, self.ev.real_functions)
+            values = self._real_values
+        domain = compiled.source_domain
         try:
-            cost = plan_cost(compiled.source_domain, real, bound)
-            planned = plan_cost(compiled.source_domain, compiled.source_problem, plan)
+            cost = plan_cost(domain, compiled.source_problem, bound, values)
+            self.last_bound_cost = cost
+            planned = plan_cost(
+                domain, compiled.source_problem, plan, self.planned_values(compiled)
+            )
             dearer = not cost <= planned + 1e-9
             no_cheaper = self.incumbent is not None and cost >= self.incumbent.cost - 1e-9
             if cost > self.max_cost or (no_cheaper and (dearer or answering)):
                 # of no use, valid or not: the preimage (the validity check) is not built (a
                 # plan drawn again before the answer mostly finds no cheaper binding)
                 return None
-            pre = plan_preimage(compiled.source_domain, real, bound)
+            real = real_problem(
+                self.problem,
+                compiled,
+                self.ev.results,
+                self.ev.real_functions,
+                later,
+                mapping,
+                terms=terms,
+            )
+            pre = plan_preimage(domain, real, bound)
         except (PlanInvalid, SSRError):
             return None
         drawn = self.finish(
