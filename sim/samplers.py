@@ -448,16 +448,23 @@ class KitchenStreams:
                     return False
             return True
 
-    def inv_reach(self, obj: str, p: ObjPose, g: Grasp) -> Iterator[tuple[Conf]]:
-        """Generator stream ``inv-reach``: base confs from which ``inv-kin`` succeeds, and from
-        near which it does too (:meth:`lands`)."""
-        target, q = multiply(self.world_pose(p), invert(g.pose))
+    def reach_ruled_out(self, obj: str, p: ObjPose, g: Grasp) -> bool:
+        """No base reaches ``g`` at ``p`` in this scene, whatever is sampled: a side grasp whose
+        hand would move in along a bearing beyond :data:`SIDE_BEARING_LIMIT`, or a hand that
+        collides on the approach from any base (:meth:`hand_blocked`)."""
+        q = multiply(self.world_pose(p), invert(g.pose))[1]
         approach = rotate(q, (0.0, 0.0, 1.0))  # the tool's z: the way the hand moves in
         if np.hypot(approach[0], approach[1]) > 0.7:  # a side grasp
             if abs(np.arctan2(approach[1], approach[0])) > SIDE_BEARING_LIMIT:
-                return
-        if self.hand_check and self.hand_blocked(obj, p, g):
+                return True
+        return bool(self.hand_check and self.hand_blocked(obj, p, g))
+
+    def inv_reach(self, obj: str, p: ObjPose, g: Grasp) -> Iterator[tuple[Conf]]:
+        """Generator stream ``inv-reach``: base confs from which ``inv-kin`` succeeds, and from
+        near which it does too (:meth:`lands`)."""
+        if self.reach_ruled_out(obj, p, g):
             return
+        target = multiply(self.world_pose(p), invert(g.pose))[0]
         tried = 0  # the attempts count IK calls: a base in collision costs little
         for _ in range(4 * self.max_attempts):
             if tried >= self.max_attempts:

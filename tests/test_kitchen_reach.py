@@ -577,3 +577,33 @@ def test_inv_reach_tries_no_base_where_the_hand_itself_meets_the_cabinet(monkeyp
         assert s.lo[0] < 0.052 and s.hi[0] > 0.304
     finally:
         task.close()
+
+
+def test_a_reach_no_base_can_make_ends_the_inv_reach_stream(cook0):
+    # The planner's inv-reach for a side grasp of the cracker box whose hand would move in
+    # facing the robot: no base reaches it in this scene, so the stream ends (its instance is
+    # used up for the solve) instead of answering "nothing this time" at every level.  A grasp
+    # some base may reach answers per batch and is not used up by a batch that found nothing.
+    from ssr_compile.streams.kitchen_module import KitchenModule
+
+    from ssr_compile.belief.particles import PoseBelief
+    from ssr_compile.stream import Generator
+
+    km = KitchenModule(cook0, np.random.default_rng(0))
+    pos, quat = cook0.world.object_pose("cracker_box")
+    surface = cook0.prior_surfaces()["cracker_box"][0][0]
+    pb = PoseBelief.point("cracker_box", surface, (pos[0], pos[1], pos[2], yaw_of(quat)))
+    ks, p = km.ks, km.obj_pose(pb)
+    grasps = ks.grasps("cracker_box")
+    facing = [g for g in grasps if abs(_bearing(ks, p, g) or 0.0) > samplers.SIDE_BEARING_LIMIT]
+    others = [g for g in grasps if _bearing(ks, p, g) is None]
+    assert facing and others
+    for g in facing:
+        gen = Generator(km.inv_reach, ("cracker_box", pb, g), "generator", "inv-reach")
+        assert gen.next() is None and gen.exhausted
+    gen = Generator(km.inv_reach, ("cracker_box", pb, others[0]), "generator", "x")
+    for _ in range(2):
+        out = gen.next()
+        assert not gen.exhausted
+        if out is not None:  # a base that really reaches the grasp
+            assert ks.inv_kin("cracker_box", p, others[0], out[0]) is not None
