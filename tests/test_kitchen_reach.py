@@ -607,3 +607,40 @@ def test_a_reach_no_base_can_make_ends_the_inv_reach_stream(cook0):
         assert not gen.exhausted
         if out is not None:  # a base that really reaches the grasp
             assert ks.inv_kin("cracker_box", p, others[0], out[0]) is not None
+
+
+def test_placements_here_on_a_surface_out_of_reach_end_the_stream(cook0):
+    # sample-placement-here from a base where no point of the surface is within the arm's
+    # reach of the mount ends at once (used up for the solve), and the geometry agrees: no
+    # placement sampled over the whole surface is within reach.  Where some point is within
+    # reach the stream is not used up.
+    from ssr_compile.sim.robot import mount_position
+    from ssr_compile.streams.kitchen_module import PLACE_HERE_REACH, KitchenModule
+
+    from ssr_compile.stream import Generator
+
+    km = KitchenModule(cook0, np.random.default_rng(0))
+    w, rng = cook0.world, np.random.default_rng(7)
+    g = km.ks.grasps("block")[0]
+    verdicts = set()
+    for bq in [(0.2, 0.8, 0.0), (0.2, -0.6, 0.0), (0.1, 0.0, 0.0), (-0.6, 1.6, 0.5)]:
+        mount = np.asarray(mount_position(bq), float)
+        for s in ("counter", "stove", "top_drawer", "bottom_drawer"):
+            out = km._surface_out_of_reach("block", s, mount)
+            verdicts.add(out)
+            sr = w.surfaces[s]
+            with km.planning(s if s.endswith("drawer") else None):
+                frame = w.surface_frame(s)
+                near = min(
+                    np.linalg.norm(np.subtract(multiply(frame, w.rest_pose("block", s, x, y, 0))[0], mount))
+                    for x, y in zip(rng.uniform(sr.lo[0], sr.hi[0], 400), rng.uniform(sr.lo[1], sr.hi[1], 400))
+                )  # fmt: skip
+            if out:
+                assert near > PLACE_HERE_REACH
+                gen = Generator(km.sample_placement_here, ("block", s, g, bq), "generator", "x")
+                assert gen.next() is None and gen.exhausted
+            elif near < PLACE_HERE_REACH - 0.05:
+                gen = Generator(km.sample_placement_here, ("block", s, g, bq), "generator", "x")
+                gen.next()
+                assert not gen.exhausted
+    assert verdicts == {True, False}
