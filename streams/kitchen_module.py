@@ -358,28 +358,10 @@ class KitchenModule(MotionStreams, BeliefStreams):
         w = self.world
         sr = w.surfaces[s]
         mount = np.asarray(mount_position(bq), float)
-        if self._surface_out_of_reach(o, s, mount):
-            return  # no placement ever: the instance is used up (not "nothing this time")
         while True:  # batches of attempts; None after a batch without a placement (as _each)
             found = yield from self._placements_here(o, s, g, bq, w, sr, mount)
             if not found:
                 yield None
-
-    def _surface_out_of_reach(self, o: str, s: str, mount) -> bool:
-        """Every placement of ``o`` on ``s`` is further than :data:`PLACE_HERE_REACH` from the
-        arm's ``mount``: the nearest, at the point of the surface nearest the mount, is.  The
-        batches of :meth:`sample_placement_here` would all fail and be asked again level after
-        level (the clutter family's inspect N = 2, seed 4: 26 failed batches for the bottom
-        drawer from where the robot stood, in one replan)."""
-        w = self.world
-        sr = w.surfaces[s]
-        with self.planning(s if s in DRAWERS else None):
-            frame = w.surface_frame(s)
-            local = multiply(invert(frame), (tuple(mount), (0.0, 0.0, 0.0, 1.0)))[0]
-            x = min(max(local[0], sr.lo[0]), sr.hi[0])
-            y = min(max(local[1], sr.lo[1]), sr.hi[1])
-            nearest = multiply(frame, w.rest_pose(o, s, x, y, 0.0))[0]
-        return float(np.linalg.norm(np.subtract(nearest, mount))) > PLACE_HERE_REACH
 
     def _placements_here(self, o, s, g, bq, w, sr, mount):
         found = False
