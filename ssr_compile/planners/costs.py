@@ -22,7 +22,7 @@ def plan_cost(
     if problem.metric is None:
         return len(actions)
     if values is None:
-        values = value_table(v for v in problem.init if isinstance(v, S.InitValue))
+        values = problem_values(problem)
     by_name = {a.name: a for a in domain.actions}
     total: float = 0
     for name, args in actions:
@@ -43,6 +43,11 @@ def value_table(values) -> dict:
         term, x = (v.fluent, v.value.value) if isinstance(v, S.InitValue) else v
         table[(term.name, tuple(a.name for a in term.args))] = x
     return table
+
+
+def problem_values(problem: S.Problem) -> dict:
+    """The numeric values of ``problem``'s initial state, as :func:`plan_cost` reads them."""
+    return value_table(v for v in problem.init if isinstance(v, S.InitValue))
 
 
 def fractional_costs(domain: S.Domain, problem: S.Problem) -> list[str]:

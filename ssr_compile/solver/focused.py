@@ -22,11 +22,10 @@ import math
 import time
 from dataclasses import replace
 
-from .. import syntax as S
 from ..compile.instantiate import Result, real_instances
 from ..errors import InstanceCapReached, PlannerFailure, SSRError
 from ..planners.base import UNSOLVABLE
-from ..planners.costs import plan_cost, value_table
+from ..planners.costs import plan_cost, problem_values, value_table
 from .evaluation import RealValues, bound_result, real_problem, real_terms
 from .loop import SolverLoop
 from .plan_evaluation import DrawMemory, StreamPlanEvaluation
@@ -417,9 +416,7 @@ class FocusedLoop(SolverLoop):
         """The numeric values of the optimistic problem ``compiled`` (:func:`value_table`),
         read once per problem."""
         if self._planned_values[0] is not compiled:
-            init = compiled.source_problem.init
-            table = value_table(v for v in init if isinstance(v, S.InitValue))
-            self._planned_values = (compiled, table)
+            self._planned_values = (compiled, problem_values(compiled.source_problem))
         return self._planned_values[1]
 
     def bound_solution(
