@@ -18,7 +18,7 @@ from ..planners import get_planner
 from ..planners.base import UNSOLVABLE, PlanResult
 from ..stream import StreamsModule, ValueTable
 from .deferral import order_stream_plan, reschedule_stream_plan, stream_producers
-from .evaluation import Evaluation, evaluate_eagerly
+from .evaluation import Evaluation, RealJoin, evaluate_eagerly
 from .options import ReplanState, SolveOptions
 from .preimage import Preimage, plan_preimage, stream_plan
 from .results import SOLVED, Solution, Statistics, plan_steps
@@ -73,6 +73,7 @@ class SolverLoop:
         if accept_drawn is None:
             accept_drawn = bool(getattr(self.backend.capabilities, "optimal", False))
         self.accept_drawn = accept_drawn
+        self.eager_join: RealJoin | None = None  # the eager instances, joined incrementally
         self.eager_seen = -1  # number of real results when cheap functions were last evaluated
         self.rechecked = False  # the last call's failures evaluated again (:meth:`recheck`)
         eager_cost = options.eager_cost
@@ -185,14 +186,11 @@ class SolverLoop:
             self.eager or self.eager_tests or self.eager_streams or self.streams.predicates
         ) and len(self.ev.results) != self.eager_seen:
             self.eager_seen = len(self.ev.results)
-            evaluate_eagerly(
-                self.streams,
-                self.problem,
-                self.eager,
-                self.eager_tests,
-                self.ev,
-                self.eager_streams,
-            )
+            if self.eager_join is None:
+                self.eager_join = RealJoin(
+                    self.streams, self.problem, self.eager, self.eager_tests, self.eager_streams
+                )
+            evaluate_eagerly(self.eager_join, self.ev)
 
     def function_estimates(self) -> dict[str, float]:
         """The value each cost function's unevaluated terms are planned with: its declared
