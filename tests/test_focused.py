@@ -17,6 +17,7 @@ from ssr_compile import syntax as S
 from ssr_compile.errors import StreamError
 from ssr_compile.parse import parse_domain, parse_problem, parse_stream_file
 from ssr_compile.solver import SolveOptions, solve
+from ssr_compile.solver.plan_evaluation import PAIR_DRAWS
 from ssr_compile.stream import load_streams_module
 
 PP = Path(__file__).parent / "fixtures" / "compile" / "pp1d"
@@ -423,7 +424,9 @@ def test_draws_again_stop_at_the_limit_and_at_an_exhausted_generator():
     # Every pose of b on the table hits a (test-cfree fails): the first stream plan draws a
     # rejected generator again at most ``resample`` times, then plans again; each stream plan
     # the tests rejected before adds ``resample`` more draws to the next one's budget (drawing
-    # costs stream calls, planning again a planner call on a larger problem).
+    # costs stream calls, planning again a planner call on a larger problem).  A draw tested
+    # against another draw of its plan (b against a placement of a drawn for the same plan,
+    # from the second stream plan on) has PAIR_DRAWS times the budget.
     for resample in (1, 3):
         module = fresh_module()
         module.module.CFREE_NEVER = True
@@ -436,8 +439,13 @@ def test_draws_again_stop_at_the_limit_and_at_an_exhausted_generator():
             elif line.startswith("  drawing again:") and per_plan:
                 per_plan[-1] += 1
         assert per_plan and per_plan[0] == resample, (resample, per_plan)
-        assert all(n <= resample * (1 + i) for i, n in enumerate(per_plan)), (resample, per_plan)
+        assert all(n <= resample * (1 + i) * PAIR_DRAWS for i, n in enumerate(per_plan)), (
+            resample,
+            per_plan,
+        )
         assert max(per_plan) > resample, (resample, per_plan)  # the budget grew
+        # past the lone draw's budget: b drawn against a's placement of the same plan
+        assert any(n > resample * (1 + i) for i, n in enumerate(per_plan)), (resample, per_plan)
 
 
 def test_no_level_is_tried_once_instantiation_has_reached_its_fixed_point(tmp_path):

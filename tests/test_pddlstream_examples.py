@@ -52,6 +52,18 @@ def test_two_blocks_into_a_tight_region(seed):
     assert {s.args[1] for s in placed} >= {"a", "b"}
 
 
+@pytest.mark.parametrize("seed", [0, 7])
+def test_placements_that_pair_with_none_are_drawn_past_without_planning_again(seed):
+    """Seeds 0 and 7 draw their first placements of both blocks into the red region's middle,
+    where no partner fits (two blocks 2 wide, one unit of slack): the stream plan's draws again
+    must find a pair that fits before the planner is asked again.  With a lone draw's budget
+    they ran out, the level rose twice and the solve took 10 and 11 planner calls."""
+    sol = solve_ctamp("tight(2)", seed)
+    assert sol.solved, sol.message
+    ctamp.check_plan("tight(2)", sol.plan)
+    assert sol.stats.planner_calls <= 7
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", [2, 3])
 def test_two_of_four_blocks_into_a_tight_region(seed):
