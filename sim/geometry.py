@@ -53,12 +53,12 @@ def quat_inv(q: Sequence[float]) -> Quat:
 def quat_from_axis_angle(axis: Sequence[float], angle: float) -> Quat:
     ax = np.asarray(axis, dtype=float)
     ax = ax / np.linalg.norm(ax)
-    s = np.sin(angle / 2.0)
-    return (float(ax[0] * s), float(ax[1] * s), float(ax[2] * s), float(np.cos(angle / 2.0)))
+    s = math.sin(angle / 2.0)
+    return (float(ax[0] * s), float(ax[1] * s), float(ax[2] * s), float(math.cos(angle / 2.0)))
 
 
 def quat_from_yaw(yaw: float) -> Quat:
-    return (0.0, 0.0, float(np.sin(yaw / 2.0)), float(np.cos(yaw / 2.0)))
+    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
 
 
 def quat_to_matrix(q: Sequence[float]) -> np.ndarray:
@@ -111,13 +111,13 @@ def invert(p_: Pose) -> Pose:
 
 def yaw_of(q: Sequence[float]) -> float:
     x, y, z, w = q
-    return float(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
 def angle_between(q1: Sequence[float], q2: Sequence[float]) -> float:
     """Rotation angle (rad) between two orientations."""
     d = abs(float(np.dot(np.asarray(q1, float), np.asarray(q2, float))))
-    return float(2.0 * np.arccos(min(1.0, d)))
+    return 2.0 * math.acos(min(1.0, d))
 
 
 def wrap_angle(a: float) -> float:

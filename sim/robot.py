@@ -45,7 +45,7 @@ ARM_REACH = 1.2  # metres from the arm's mount beyond which no IK is tried
 def mount_position(base) -> np.ndarray:
     """World position of the arm's mount (panda_link0) with the base at ``base`` (x, y, yaw)."""
     x, y, yaw = (float(v) for v in base)
-    return np.array([x + MOUNT_OFFSET[0] * np.cos(yaw), y + MOUNT_OFFSET[0] * np.sin(yaw),
+    return np.array([x + MOUNT_OFFSET[0] * math.cos(yaw), y + MOUNT_OFFSET[0] * math.sin(yaw),
                      MOUNT_OFFSET[2]])  # fmt: skip
 
 
@@ -288,7 +288,7 @@ class Robot:
             if dq[3] < 0:
                 dq = tuple(-v for v in dq)
             s = norm(dq[:3])
-            e_rot = np.zeros(3) if s < 1e-12 else np.asarray(dq[:3]) / s * 2 * np.arctan2(s, dq[3])
+            e_rot = np.zeros(3) if s < 1e-12 else np.asarray(dq[:3]) / s * 2 * math.atan2(s, dq[3])
             pos_err, ori_err = norm(e_pos), norm(e_rot)
             if pos_err < pos_tol * 0.5 and ori_err < ori_tol * 0.5:
                 break

@@ -12,6 +12,7 @@ tuples (base: x, y, yaw; arm: 7 joints); trajectories are tuples of configuratio
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -414,8 +415,8 @@ class KitchenStreams:
         psi = self.rng.uniform(*bearing)
         r = self.rng.uniform(*r_range)
         yaw = psi + self.rng.uniform(-0.3, 0.3)
-        link0 = np.asarray(target_xy[:2]) - r * np.array([np.cos(psi), np.sin(psi)])
-        base_xy = link0 - MOUNT_OFFSET[0] * np.array([np.cos(yaw), np.sin(yaw)])
+        link0 = np.asarray(target_xy[:2]) - r * np.array([math.cos(psi), math.sin(psi)])
+        base_xy = link0 - MOUNT_OFFSET[0] * np.array([math.cos(yaw), math.sin(yaw)])
         conf = (float(base_xy[0]), float(base_xy[1]), float(yaw))
         lo = [lim[0] for lim in BASE_LIMITS]
         hi = [lim[1] for lim in BASE_LIMITS]
@@ -455,7 +456,7 @@ class KitchenStreams:
         q = multiply(self.world_pose(p), invert(g.pose))[1]
         approach = rotate(q, (0.0, 0.0, 1.0))  # the tool's z: the way the hand moves in
         if np.hypot(approach[0], approach[1]) > 0.7:  # a side grasp
-            if abs(np.arctan2(approach[1], approach[0])) > SIDE_BEARING_LIMIT:
+            if abs(math.atan2(approach[1], approach[0])) > SIDE_BEARING_LIMIT:
                 return True
         return bool(self.hand_check and self.hand_blocked(obj, p, g))
 

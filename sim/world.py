@@ -20,6 +20,7 @@ a reset, collisions are ``getClosestPoints`` queries with an explicit client id.
 
 from __future__ import annotations
 
+import math
 import struct
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -362,7 +363,7 @@ class World:
         s = self.surfaces[surface]
         hx, hy, _ = self.half_extents[name]
         yaw = yaw_of(rel[1])
-        c, si = abs(np.cos(yaw)), abs(np.sin(yaw))
+        c, si = abs(math.cos(yaw)), abs(math.sin(yaw))
         ex, ey = c * hx + si * hy, si * hx + c * hy
         x, y = rel[0][0], rel[0][1]
         return bool(
@@ -381,7 +382,7 @@ class World:
         rel = multiply(invert(self.surface_frame(surface)), world_pose)
         s = self.surfaces[surface]
         # the tilt of the object's z axis: 2 asin(|(qx, qy)|)
-        upright = 2.0 * np.arcsin(min(1.0, float(np.hypot(rel[1][0], rel[1][1])))) <= SETTLE_TILT
+        upright = 2.0 * math.asin(min(1.0, math.hypot(rel[1][0], rel[1][1]))) <= SETTLE_TILT
         dz = rel[0][2] - (s.z + self.half_extents[name][2])
         if upright and -1e-3 <= dz <= z_tol and self.inside_surface(name, surface, rel):
             return self.rest_pose(name, surface, rel[0][0], rel[0][1], yaw_of(rel[1]))
