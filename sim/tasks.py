@@ -137,6 +137,9 @@ def _place_random(
 GRASP_SLACK = (0.015, 0.05)
 
 
+PROBE_DIGITS = 9  # decimals of a pose that seed its reach probes (:func:`_probe_rng`)
+
+
 def _probe_rng(p) -> np.random.Generator:
     """A generator seeded by the pose ``p`` (for a check that must not move the seed's draws),
     rounded to PROBE_DIGITS decimals first: the last bits of a pose's quaternion are those of
@@ -144,11 +147,8 @@ def _probe_rng(p) -> np.random.Generator:
     disagree by an ulp or two), and seeded by the exact bytes, an ulp drew other probes and
     gave another world (inspect seeds 2 and 3)."""
     (x, y, z), q = p.rel
-    values = [round(float(v), PROBE_DIGITS) + 0.0 for v in (x, y, z, *q)]
+    values = [round(float(v), PROBE_DIGITS) + 0.0 for v in (x, y, z, *q)]  # + 0.0: no -0.0
     return np.random.default_rng(zlib.crc32(np.asarray(values, float).tobytes()))
-
-
-PROBE_DIGITS = 9
 
 
 def _graspable(

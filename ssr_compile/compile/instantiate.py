@@ -509,9 +509,6 @@ def real_instances(
     ``predicates``, of the stream predicates, as tests), whose domain holds in the real facts
     alone: the problem's and those of the ``evaluated`` results.  Functions first, each in the
     order of a join over the facts."""
-    wanted_functions = None if functions is None else set(functions)
-    wanted_tests = None if tests is None else set(tests)
-    wanted_streams = set(streams_with_outputs)
     levels: dict[S.Atom, int] = {}
     index: dict[str, list[S.Atom]] = defaultdict(list)
 
@@ -529,12 +526,33 @@ def real_instances(
         for atom in res.certified:
             add_fact(atom, 0)
     _apply_rules(streams, index, add_fact, levels)
-    out = []
-    for fn in streams.functions:
-        if wanted_functions is not None and fn.name not in wanted_functions:
-            continue
-        for binding, _facts in _matches(fn.params, fn.domain, index, levels):
-            out.append(Instance(fn.name, tuple(binding[p.name] for p in fn.params), "function"))
+    parts = real_parts(streams, functions, tests, streams_with_outputs, predicates)
+    return [
+        Instance(name, tuple(binding[p.name] for p in params), kind)
+        for name, params, domain, kind in parts
+        for binding, _facts in _matches(params, domain, index, levels)
+    ]
+
+
+def real_parts(
+    streams: S.StreamFile,
+    functions: Iterable[str] | None = None,
+    tests: Iterable[str] | None = None,
+    streams_with_outputs: Iterable[str] = (),
+    predicates: bool = False,
+) -> list[tuple[str, tuple, S.Formula, str]]:
+    """What :func:`real_instances` joins, in its order: ``(name, parameters, domain, kind)``
+    of the cost functions ``functions`` (``None``: all), then of the tests ``tests`` (``None``:
+    all) and the streams ``streams_with_outputs`` in the stream file's order, then (with
+    ``predicates``) of the stream predicates, as tests."""
+    wanted_functions = None if functions is None else set(functions)
+    wanted_tests = None if tests is None else set(tests)
+    wanted_streams = set(streams_with_outputs)
+    parts = [
+        (fn.name, fn.params, fn.domain, "function")
+        for fn in streams.functions
+        if wanted_functions is None or fn.name in wanted_functions
+    ]
     for stream in streams.streams:
         if stream.is_test:
             if wanted_tests is not None and stream.name not in wanted_tests:
@@ -542,12 +560,10 @@ def real_instances(
         elif stream.name not in wanted_streams:
             continue
         kind = "test" if stream.is_test else "stream"
-        for binding, _facts in _matches(stream.inputs, stream.domain, index, levels):
-            out.append(Instance(stream.name, tuple(binding[p.name] for p in stream.inputs), kind))
-    for p in streams.predicates if predicates else ():
-        for binding, _facts in _matches(p.params, p.domain, index, levels):
-            out.append(Instance(p.name, tuple(binding[t.name] for t in p.params), "test"))
-    return out
+        parts.append((stream.name, stream.inputs, stream.domain, kind))
+    if predicates:
+        parts += [(p.name, p.params, p.domain, "test") for p in streams.predicates]
+    return parts
 
 
 def _fact_order(a: S.Atom):

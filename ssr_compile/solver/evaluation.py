@@ -11,7 +11,14 @@ from dataclasses import replace
 from typing import Any
 
 from .. import syntax as S
-from ..compile.instantiate import Instance, Result, _matches, ground_atom, real_instances
+from ..compile.instantiate import (
+    Instance,
+    Result,
+    _matches,
+    ground_atom,
+    real_instances,
+    real_parts,
+)
 from ..compile.predicates import predicate_tests
 from ..errors import StreamError, StreamFailure
 from ..stream import Generator, StreamsModule, ValueTable, call_function, call_test
@@ -222,18 +229,7 @@ class RealJoin:
     def __init__(self, streams, problem, functions, tests, eager_streams):
         self.streams, self.problem = streams, problem
         self.selection = (set(functions), set(tests), set(eager_streams))
-        wanted_functions, wanted_tests, wanted_streams = self.selection
-        self.parts = [
-            (f.name, f.params, f.domain, "function")
-            for f in streams.functions
-            if f.name in wanted_functions
-        ]
-        for st in streams.streams:
-            if st.name in (wanted_tests if st.is_test else wanted_streams):
-                self.parts.append(
-                    (st.name, st.inputs, st.domain, "test" if st.is_test else "stream")
-                )
-        self.parts += [(p.name, p.params, p.domain, "test") for p in streams.predicates]
+        self.parts = real_parts(streams, *self.selection, predicates=True)
         self._reset()
 
     def _reset(self) -> None:
