@@ -12,7 +12,9 @@ package, in the order :func:`compile_problem` runs them:
 4. ``leaves``: one shared object for the optimistic leaf outputs of a stream (motion
    trajectories: nothing consumes them, their facts name the inputs), mapped back per instance
    (:class:`~.leaves.SharedLeaves`);
-5. ``lower``, which fits the task to the backend's :class:`~.capabilities.Capabilities` with
+5. ``hubs``: an action over many pairs (the base motions between every two base
+   configurations) as two half-steps through a hub (:class:`~.hubs.Hubs`);
+6. ``lower``, which fits the task to the backend's :class:`~.capabilities.Capabilities` with
    ``ground`` (for backends that take a ground task), ``derived`` (axioms compiled away when
    unsupported), ``quantifiers``, ``disjunctions``, ``negations``, ``costs`` (integer action
    costs; the result keeps the ``scale``) and ``rename`` (names every reader accepts), in that
@@ -33,6 +35,7 @@ from dataclasses import dataclass, replace
 from .. import syntax as S
 from .capabilities import Capabilities
 from .constraints import Constrained, constrain_plan
+from .hubs import route_through_hubs
 from .instantiate import (  # noqa: F401  (declare_stream_predicates: re-exported)
     Instance,
     Instantiation,
@@ -48,6 +51,9 @@ from .standins import StandIns
 # Share the optimistic leaf outputs of streams (pass 4); measurement scripts turn it off to
 # compare (bench/solve_bench.py --no-shared-leaves).
 SHARE_LEAVES = True
+# Route actions over many pairs through hubs (pass 5); measurement scripts turn it off to
+# compare.
+ROUTE_HUBS = True
 
 # Everything supported (``FullCapabilities`` is the old name of the type).
 EVERYTHING = Capabilities()
@@ -166,6 +172,10 @@ def compile_problem(
         shared = share_leaves(passes[-1].domain, passes[-1].problem, streams, inst)
         if shared.merged:
             passes.append(shared)
+    if inst is not None and ROUTE_HUBS:
+        hubs = route_through_hubs(passes[-1].domain, passes[-1].problem)
+        if hubs.split:
+            passes.append(hubs)
     cost_functions = {f.name for f in streams.functions} if streams is not None else set()
     lowered = lower(
         passes[-1].domain,
