@@ -155,7 +155,7 @@ def test_the_kitchens_base_motions_plan_the_same_through_a_hub(monkeypatch, leve
     plans = {}
     for on in (False, True):
         monkeypatch.setattr(H, "MIN_PAIRS", 1 if on else 10**9)
-        c = compile_problem(d, s, p, level=level)
+        c = compile_problem(d, s, p, level=level, hubs=True)
         split = [x for x in c.passes if isinstance(x, H.Hubs)]
         assert bool(split) == on
         result = get_planner("fd").solve(c.domain, c.problem, time_limit=60)
@@ -164,3 +164,15 @@ def test_the_kitchens_base_motions_plan_the_same_through_a_hub(monkeypatch, leve
         plan_preimage(c.source_domain, c.source_problem, plans[on])
     assert plans[True] == plans[False]
     assert plans[True][0][0] == "move-base"
+
+
+def test_a_compile_artifact_keeps_one_step_per_action(monkeypatch):
+    """`ssr-compile compile` writes each compiled action's one action of the user's
+    (actions.json): the pass runs only where the solver asks for it."""
+    monkeypatch.setattr(H, "MIN_PAIRS", 1)
+    d, s, p = (
+        parse_file(KITCHEN / n) for n in ("domain.pddl", "stream.pddl", "problem-inspect.pddl")
+    )
+    c = compile_problem(d, s, p, level=4)
+    assert not any(isinstance(x, H.Hubs) for x in c.passes)
+    assert not any("hub" in a.name for a in c.domain.actions)

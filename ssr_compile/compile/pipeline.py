@@ -51,8 +51,9 @@ from .standins import StandIns
 # Share the optimistic leaf outputs of streams (pass 4); measurement scripts turn it off to
 # compare (bench/solve_bench.py --no-shared-leaves).
 SHARE_LEAVES = True
-# Route actions over many pairs through hubs (pass 5); measurement scripts turn it off to
-# compare.
+# Route actions over many pairs through hubs (pass 5) when the caller asks (the solver does,
+# SolveOptions.hubs; a compile artifact maps each action to one of the user's, so `compile`
+# does not); measurement scripts turn it off here to compare.
 ROUTE_HUBS = True
 
 # Everything supported (``FullCapabilities`` is the old name of the type).
@@ -139,6 +140,7 @@ def compile_problem(
     unit_cost: bool = False,
     share: bool = False,
     leaves: bool | None = None,
+    hubs: bool = False,
     standins: StandIns | None = None,
     real_only: Container[str] = frozenset(),
 ) -> Compiled:
@@ -172,10 +174,10 @@ def compile_problem(
         shared = share_leaves(passes[-1].domain, passes[-1].problem, streams, inst)
         if shared.merged:
             passes.append(shared)
-    if inst is not None and ROUTE_HUBS:
-        hubs = route_through_hubs(passes[-1].domain, passes[-1].problem)
-        if hubs.split:
-            passes.append(hubs)
+    if inst is not None and hubs and ROUTE_HUBS:
+        routed = route_through_hubs(passes[-1].domain, passes[-1].problem)
+        if routed.split:
+            passes.append(routed)
     cost_functions = {f.name for f in streams.functions} if streams is not None else set()
     lowered = lower(
         passes[-1].domain,

@@ -227,6 +227,7 @@ class SolverLoop:
             unit_cost=self.options.unit_cost,
             share=self.options.share,
             leaves=self.options.leaves,
+            hubs=self.options.hubs,
             standins=self.standins,
             real_only=self.real_only,
         )

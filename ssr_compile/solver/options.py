@@ -82,6 +82,9 @@ class SolveOptions:
     ``leaves``: one object in the planner's task for all the optimistic leaf outputs of a
     stream (motion trajectories; :mod:`ssr_compile.compile.leaves`), mapped back per instance;
     on by default (the kitchen's replans: 4,225 objects down to 128 at the same level).
+    ``hubs``: an action over many pairs (the base motions between every two base
+    configurations) as two half-steps through a hub in the planner's task
+    (:mod:`ssr_compile.compile.hubs`), from ``hubs.MIN_PAIRS`` pairs; on by default.
     ``unit_cost``: plan with unit action costs.  ``progress``: called with a line of text per
     iteration and per stream plan (``None``: silent).
     """
@@ -106,6 +109,7 @@ class SolveOptions:
     unit_cost: bool = False
     share: bool = False
     leaves: bool = True
+    hubs: bool = True
     progress: Callable[[str], None] | None = None
 
     def __post_init__(self) -> None:
