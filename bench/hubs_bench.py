@@ -9,6 +9,7 @@ solved ``--runs`` times each way, interleaved; medians are printed with the rati
 Counts (pair facts, ground actions, plan cost) do not depend on the machine.
 
 Run: python bench/hubs_bench.py                            # cook, seed 0, 120 s, 3 runs each
+     python bench/hubs_bench.py --full                     # 300 s of the episode, 5 runs each
      python bench/hubs_bench.py --task FILE.toml --seed 5 --time-limit 200
      ssr-compile tasks generate --kind cook --objects 8 --hiders 6 -o /tmp/k6.toml
      python bench/hubs_bench.py --task /tmp/k6.toml --seed 1 --time-limit 150
@@ -98,10 +99,15 @@ def main() -> None:
     ap.add_argument("--task", default="cook", help="kitchen task or task file (default cook)")
     ap.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
     ap.add_argument(
-        "--time-limit", type=float, default=120.0, help="planning time of the episode (120 s)"
+        "--time-limit", type=float, default=None, help="planning time of the episode (120 s)"
     )
-    ap.add_argument("--runs", type=int, default=3, help="planner runs each way (default 3)")
+    ap.add_argument("--runs", type=int, default=None, help="planner runs each way (default 3)")
+    ap.add_argument("--full", action="store_true", help="300 s of the episode and 5 runs each way")
     args = ap.parse_args()
+    if args.time_limit is None:
+        args.time_limit = 300.0 if args.full else 120.0
+    if args.runs is None:
+        args.runs = 5 if args.full else 3
     captured = capture(args.task, args.seed, args.time_limit)
     if captured is None:
         print("no planner call was made")
