@@ -10,6 +10,7 @@ import pytest
 
 from ssr_compile import syntax as S
 from ssr_compile.compile import hubs as H
+from ssr_compile.compile.lower import lower
 from ssr_compile.compile.pipeline import compile_problem
 from ssr_compile.errors import SSRError
 from ssr_compile.parse import parse_file, parse_text
@@ -176,3 +177,21 @@ def test_a_compile_artifact_keeps_one_step_per_action(monkeypatch):
     c = compile_problem(d, s, p, level=4)
     assert not any(isinstance(x, H.Hubs) for x in c.passes)
     assert not any("hub" in a.name for a in c.domain.actions)
+
+
+@pytest.mark.parametrize("backend", ["fd:lama-first", "up:fast-downward", "pyperplan"])
+def test_every_backend_plans_through_a_hub(monkeypatch, backend):
+    """The hub's task as each backend reads it (lowered to its capabilities, ground for
+    pyperplan): the plan maps back to a valid plan of the task."""
+    monkeypatch.setattr(H, "MIN_PAIRS", 100)
+    domain = parse_text(ROADS, "domain.pddl")
+    problem = roads_problem(12, goal="(and (visited p1) (at p2))")
+    hubs = H.route_through_hubs(domain, problem)
+    assert hubs.split
+    planner = get_planner(backend)
+    lowered = lower(hubs.domain, hubs.problem, planner.capabilities)
+    result = planner.solve(lowered.domain, lowered.problem, time_limit=60)
+    assert result.status == "solved", result.message
+    plan = hubs.map_plan(lowered.map_plan(result.actions))
+    assert [n for n, _ in plan] == ["drive", "drive"]
+    plan_preimage(domain, problem, plan)
