@@ -34,8 +34,8 @@ def capture(task: str, seed: int, time_limit: float) -> tuple | None:
     lower = pipeline.lower
 
     def recording(domain, problem, caps, **kwargs):
-        keys = hubs._candidates(domain, problem)
-        preds = {k.pred for k in keys.values()}
+        keys = hubs.candidates(domain, problem)
+        preds = {k.pred for k, _, _ in keys.values()}
         pairs = sum(1 for f in problem.init if getattr(f, "pred", None) in preds)
         if best[0] is None or pairs > best[0][4]:
             best[0] = (domain, problem, caps, kwargs, pairs)

@@ -140,8 +140,10 @@ def _split_of(action: S.Action, key: S.Atom) -> tuple[tuple[str, ...], tuple[str
     return xs, tuple(p for p in params if p in ys)
 
 
-def _candidates(domain: S.Domain, problem: S.Problem) -> dict[str, S.Atom]:
-    """Action name -> its key atom, for actions that may be split."""
+def candidates(
+    domain: S.Domain, problem: S.Problem
+) -> dict[str, tuple[S.Atom, tuple[str, ...], tuple[str, ...]]]:
+    """Action name -> ``(key atom, X, Y)`` for each action that may be split."""
     reads: Counter[str] = Counter()
     changed: set[str] = set()
     for action in domain.actions:
@@ -156,8 +158,9 @@ def _candidates(domain: S.Domain, problem: S.Problem) -> dict[str, S.Atom]:
     for action in domain.actions:
         for c in S.conjuncts(action.precondition):
             if isinstance(c, S.Atom) and c.pred not in changed and reads[c.pred] == 1:
-                if _split_of(action, c) is not None:
-                    out[action.name] = c
+                split = _split_of(action, c)
+                if split is not None:
+                    out[action.name] = (c, *split)
                     break
     return out
 
@@ -202,11 +205,11 @@ def route_through_hubs(domain: S.Domain, problem: S.Problem) -> Hubs:
     docstring), or the task as it was."""
     if domain.durative_actions or problem.goal is None:
         return Hubs(domain, problem)
-    keys = _candidates(domain, problem)
+    keys = candidates(domain, problem)
     if not keys:
         return Hubs(domain, problem)
     facts: dict[str, list[S.Atom]] = {name: [] for name in keys}
-    by_pred = {key.pred: name for name, key in keys.items()}
+    by_pred = {key.pred: name for name, (key, _, _) in keys.items()}
     for f in problem.init:
         if isinstance(f, S.Atom) and f.pred in by_pred:
             facts[by_pred[f.pred]].append(f)
@@ -226,9 +229,8 @@ def route_through_hubs(domain: S.Domain, problem: S.Problem) -> Hubs:
     added: list[S.Atom] = []
     total = 0
     by_name = {a.name: a for a in domain.actions}
-    for name, key in keys.items():
+    for name, (key, xs, ys) in keys.items():
         action = by_name[name]
-        xs, ys = _split_of(action, key)
         rows: dict[tuple, set[tuple]] = {}
         tuples: dict[tuple[tuple, tuple], S.Atom] = {}
         for f in facts[name]:
@@ -244,9 +246,7 @@ def route_through_hubs(domain: S.Domain, problem: S.Problem) -> Hubs:
         out_name, in_name = _fresh(f"{name}-hub-out", taken), _fresh(f"{name}-hub-in", taken)
         from_p, to_p = _fresh(f"{name}-hub-from", taken), _fresh(f"{name}-hub-to", taken)
         at_p = _fresh(f"{name}-hub-at", taken)
-        hub_var = "?hub"
-        while hub_var in S.names(action.parameters):
-            hub_var += "_"
+        hub_var = _fresh("?hub", set(S.names(action.parameters)))
         h = S.Var(hub_var)
         typed = {p.name: p for p in action.parameters}
         for members, seconds in classes:
