@@ -458,3 +458,29 @@ def test_draws_again_wait_for_levels_climbed_not_for_the_first_level():
         assert largest < largest_from_one
         assert by_levels_climbed.stats.planner_calls <= from_one.stats.planner_calls
         assert cost <= cost_from_one + 1e-6
+
+
+def test_a_level_rise_for_a_cheaper_plan_when_one_failed_only_on_its_draws():
+    """``cheaper_rises``: with ``fd`` (not cost-optimal, so a plan that holds is kept while the
+    planner is asked for a cheaper one), the blocked problem, seed 1: a plan planned cheaper
+    than the kept one failed on the placements it drew, and the next plan of that level was no
+    cheaper.  Without a rise the kept plan is the answer; with one, the level rises, the held-
+    back draws come back, and a cheaper plan is found.  Both plans check on the geometry at the
+    cost reported, and the progress says why the level rose."""
+    out = {}
+    for rises in (0, 1):
+        said: list[str] = []
+        solution, plan, cost = _solve(
+            TAMP2D, "problem-blocked.pddl", time_limit=30, module=T.make_module(1),
+            initial_level=3, cheaper_rises=rises, progress=said.append,
+        )  # fmt: skip
+        assert solution.cost == pytest.approx(cost, abs=1e-6)
+        assert [args[0] for name, args in plan if name == "pick"] == ["b1", "b0"]
+        rose = [x for x in said if "failed on its draws" in x]
+        assert len(rose) == rises  # at most this many rises
+        out[rises] = (cost, solution.stats.levels)
+    (without, levels0), (with_rise, levels1) = out[0], out[1]
+    assert with_rise < without - 1.0
+    assert max(levels1) == max(levels0) + 1
+    with pytest.raises(ValueError, match="cheaper_rises"):
+        pytest.importorskip("ssr_compile.solver").SolveOptions(cheaper_rises=-1)

@@ -187,6 +187,8 @@ def test_settings_refuse_unknown_variants_and_bad_limits():
         PolicySettings(budget=0)
     with pytest.raises(ValueError, match="max_cycles"):
         PolicySettings(max_cycles=0)
+    with pytest.raises(ValueError, match="cheaper_rises"):
+        PolicySettings(cheaper_rises=-1)
 
 
 # ---------------------------------------------------------------- ConstantFacts

@@ -45,3 +45,40 @@ def test_stow_moves_the_sugar_box_before_closing_the_top_drawer(capsys):
     push = max(i for i, (n, a) in enumerate(plan) if n == "push" and a[0] == "top_drawer")
     sugar_pick = next(i for i, (n, a) in enumerate(plan) if n == "pick" and a[0] == "sugar_box")
     assert sugar_pick < push
+
+
+@pytest.mark.slow
+def test_the_policy_rises_a_level_for_a_cheaper_plan_than_one_levels_draws_left():
+    """Stow, seed 3, the first cycle's plan: the plan that puts the block in the drawer
+    straight away (then takes the tall sugar box out and closes the drawer) fails on the arm
+    configurations it draws at level 4 (they hit the sugar box), and at that level only a plan
+    that picks the block twice (put it down, move the sugar box, pick it again) holds.  The
+    policy's attempts rise a level once for a cheaper plan (``cheaper_rises``): the draws come
+    back, the first plan holds, picks the block once and costs less."""
+    from ssr_compile.streams.environments.kitchen import make_episode
+
+    from ssr_compile.policy_settings import PolicySettings
+    from ssr_compile.solver import solve
+
+    settings = PolicySettings()
+    out = {}
+    for rises in (settings.cheaper_rises, 0):
+        episode = make_episode("stow", 3)
+        try:
+            agent = episode.agent
+            agent.update(None, episode.environment.observe())
+            problem, module = agent.problem()
+            options = settings.solve_options(
+                time_limit=120, max_level=12, cheaper_rises=rises, progress=(said := []).append
+            )
+            sol = solve(agent.domain, agent.streams, problem, module, options)
+        finally:
+            episode.close()
+        assert sol.solved, sol.message
+        picks = [s.args[0] for s in sol.plan if s.name == "pick"]
+        out[rises] = (sol.cost, picks, any("failed on its draws" in x for x in said))
+    assert settings.cheaper_rises == 1
+    (cost, picks, rose), (cost0, picks0, rose0) = out[1], out[0]
+    assert rose and not rose0
+    assert picks == ["block", "sugar_box"] and picks0.count("block") == 2
+    assert cost < cost0
