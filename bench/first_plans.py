@@ -7,6 +7,7 @@ Run: python bench/first_plans.py                          # Table I's four tasks
      python bench/first_plans.py --tasks cook --seeds 5-9
      python bench/first_plans.py --set cheaper_rises=0    # a SolveOptions field changed
      python bench/first_plans.py --jsonl F                # also one JSON line per plan
+     python bench/first_plans.py --full                   # the four tasks, seeds 0-24
 
 Runs from a checkout of an older commit too (``PYTHONPATH=CHECKOUT python bench/...``): it
 uses only the options every commit since the kitchen's deferral has.
@@ -78,7 +79,8 @@ def seeds_of(text: str) -> list[int]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", default="inspect,stow,swap,cook", help="kitchen tasks or files")
-    ap.add_argument("--seeds", default="0-4", help="seeds: 0-4, or 1,3,8 (default 0-4)")
+    ap.add_argument("--seeds", default=None, help="seeds: 0-4, or 1,3,8 (default 0-4)")
+    ap.add_argument("--full", action="store_true", help="the long version: seeds 0-24")
     ap.add_argument("--time-limit", type=float, default=300.0, help="per solve (default 300)")
     ap.add_argument(
         "--set", action="append", default=[], metavar="FIELD=VALUE",
@@ -86,6 +88,8 @@ def main() -> int:
     )  # fmt: skip
     ap.add_argument("--jsonl", default=None, help="also write one JSON line per plan here")
     args = ap.parse_args()
+    if args.seeds is None:
+        args.seeds = "0-24" if args.full else "0-4"
     changes = {}
     for item in args.set:
         name, sep, value = item.partition("=")

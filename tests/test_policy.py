@@ -126,7 +126,7 @@ def test_an_unconstrained_attempt_past_the_instance_cap_where_it_starts_starts_a
 def test_without_plan_constraints_replanning_moves_the_base_again_and_again():
     motions = {}
     for seed in SEEDS:
-        episode, result = _progress(seed, "neither", resample=0)
+        episode, result = _progress(seed, "neither", resample=0, cheaper_rises=0)
         motions[seed] = episode.environment.base_motions
         assert result.constrained_held == 0
     # The paper's oscillation: after a noisy move, a failed IK restart from the reached pose
@@ -292,8 +292,10 @@ def test_environment_never_exposes_truth_to_the_agent():
 
 def test_run_command_exit_codes_and_log(tmp_path, capsys):
     log = tmp_path / "trace.jsonl"
-    # the §VI oscillation, with the Focused loop as the paper has it (no draws again at once)
+    # the §VI oscillation, with the Focused loop as the paper has it (no draws again at once,
+    # no level rise for a cheaper plan)
     args = ["run", "progress", "--seed", "5", "--variant", "neither", "--resample", "0"]
+    args += ["--cheaper-rises", "0"]
     assert main([*args, "--log", str(log)]) == 0
     out = capsys.readouterr().out
     assert "the goal holds in the true state" in out

@@ -144,6 +144,16 @@ def _configure(p: argparse.ArgumentParser) -> None:
         "the stream plan it is tested against (default 2; 0: off, the Focused loop as the "
         "paper has it); or example.toml's",
     )
+    p.add_argument(
+        "--cheaper-rises",
+        type=_count,
+        default=1,
+        metavar="N",
+        help="when a planning attempt keeps a plan and the next is no cheaper, while a plan "
+        "planned cheaper failed only on the values its level drew, the level rises up to N "
+        "times for a cheaper plan before the kept plan is taken (default 1; 0: off, the "
+        "Focused loop as the paper has it)",
+    )
     p.add_argument("--log", metavar="FILE.jsonl", help="write one JSON line per cycle to FILE")
     p.add_argument("--gif", metavar="FILE", help="an animation of the episode (kitchen tasks)")
     p.add_argument("--json", action="store_true", help="print the outcome as JSON (no cycle lines)")
@@ -247,6 +257,7 @@ def run(args: argparse.Namespace) -> int:
         execute_time=args.execute_time,
         max_failures=args.max_failures,
         max_looks=args.max_looks,
+        cheaper_rises=args.cheaper_rises,
         **({} if args.resample is None else {"resample": args.resample}),
     )
     from ..planners import get_planner
