@@ -203,6 +203,27 @@ class FocusedLoop(SolverLoop):
         if kept is None or self.rebind_draws <= 0 or self.incumbent is None:
             return
         compiled, plan, inst, ordered, later, kept_cost = kept
+        # The tests last (they bind nothing): when the values drawn give the kept plan's cost
+        # again, it does not depend on them, and the tests need not run (belief-detect's clear
+        # problem: the detection costs the same for every observation; its two visibility
+        # tests ran for nothing, 76 ms against 69 ms at 3881689).
+        tests_last = [r for r in ordered if r.instance.kind != "test"]
+        tests_last += [r for r in ordered if r.instance.kind == "test"]
+
+        def same_again(binding: dict[str, str]) -> bool:
+            if later:
+                return False
+            bound = [(name, tuple(binding.get(a, a) for a in args)) for name, args in plan]
+            if self._real_values is None:
+                self._real_values = RealValues(self.problem, self.ev.real_functions)
+            try:
+                cost = plan_cost(
+                    compiled.source_domain, compiled.source_problem, bound, self._real_values
+                )
+            except (KeyError, SSRError):  # a cost term not evaluated yet
+                return False
+            return same_cost(cost, kept_cost)
+
         idle = 0
         for _ in range(REBIND_MOST):
             if time.monotonic() >= self.deadline or idle >= self.rebind_draws:
@@ -210,10 +231,15 @@ class FocusedLoop(SolverLoop):
             idle += 1
             self.say("  drawing the kept plan's stream plan again, for a cheaper binding")
             evaluation = StreamPlanEvaluation(
-                ordered, inst, self.ev, self.module, self.problem, self.draws, self.stats,
-                self.say, self.deadline,
+                tests_last, inst, self.ev, self.module, self.problem, self.draws, self.stats,
+                self.say, self.deadline, before_tests=same_again,
             )  # fmt: skip
-            if not evaluation.run() or not evaluation.ok:
+            if not evaluation.run():
+                continue
+            if evaluation.stopped:
+                self.say("  the same cost with the values drawn again: no cheaper binding")
+                return
+            if not evaluation.ok:
                 continue
             best = self.incumbent
             self.last_bound_cost = None

@@ -70,8 +70,13 @@ class StreamPlanEvaluation:
         stats: Statistics,
         say: Callable[[str], None],
         deadline: float,
+        before_tests: Callable[[dict[str, str]], bool] | None = None,
     ):
         self.ordered, self.ev, self.module, self.draws = ordered, ev, module, draws
+        # asked once, with the binding, when every result before the first test succeeded:
+        # True stops the evaluation there (``stopped``; FocusedLoop.draw_kept_again)
+        self.before_tests = before_tests
+        self.stopped = False
         self.objects, self.shared = instantiation.objects, instantiation.shared
         self.stats, self.say, self.deadline = stats, say, deadline
         self.binding: dict[str, str] = {}  # optimistic object -> its real name
@@ -173,6 +178,11 @@ class StreamPlanEvaluation:
             if time.monotonic() >= self.deadline:
                 return None
             rid = id(res)
+            if self.before_tests is not None and res.instance.kind == "test":
+                check, self.before_tests = self.before_tests, None
+                if all_ok and rid not in self.settled and check(self.binding):
+                    self.stopped = True
+                    return False, []
             if rid in self.settled:
                 if not self.settled[rid]:
                     all_ok = False
