@@ -434,3 +434,28 @@ def test_cli_solve_reads_example_toml(capsys):
         "detect",
         "pick",
     ]
+
+
+def test_the_kept_plan_drawn_again_stops_before_its_tests_when_its_cost_comes_out_the_same(
+    capsys,
+):
+    """The clear problem with the example's ``fd:opt``: the detect plan holds dearer than
+    planned and is kept; before the answer its stream plan is drawn again (``rebind``) for a
+    cheaper binding.  The detection costs the same for every observation of a target nothing
+    hides: the draw again stops as soon as its cost terms are known, before the visibility
+    tests (two calls, not four), and the answer is the plan drawn first."""
+    from ssr_compile.cli import main
+
+    assert main(["solve", "belief-detect", "--problem", "clear", "-v"]) == 0
+    said = capsys.readouterr()
+    out = said.err + said.out  # the progress, then the plan and the stream statistics
+    assert "drawing the kept plan's stream plan again" in out
+    assert "the same cost with the values drawn again: no cheaper binding" in out
+    calls = {
+        line.split()[0]: int(line.split()[2])
+        for line in out.splitlines()
+        if line.startswith("  ") and len(line.split()) > 2 and line.split()[1] == "calls"
+    }
+    assert calls["sample-obs"] == 2 and calls["obscost"] == 2  # drawn and priced again
+    assert calls["test-vis"] == 2  # the two boxes, tested once: not again for the same cost
+    assert "cost 4.04832" in out
