@@ -82,3 +82,39 @@ def test_the_policy_rises_a_level_for_a_cheaper_plan_than_one_levels_draws_left(
     assert rose and not rose0
     assert picks == ["block", "sugar_box"] and picks0.count("block") == 2
     assert cost < cost0
+
+
+@pytest.mark.slow
+def test_a_rise_that_finds_nothing_cheaper_reports_the_level_the_plan_was_found_at():
+    """Cook, seed 1, the first cycle's plan: the rise for a cheaper plan finds none, and the
+    answer is the plan kept at the level below.  The solution says where its plan was found
+    (``Solution.level``), below the last iteration's level, and costs what it costs without
+    the rise."""
+    from ssr_compile.streams.environments.kitchen import make_episode
+
+    from ssr_compile.policy_settings import PolicySettings
+    from ssr_compile.solver import solve
+
+    settings = PolicySettings()
+    costs = {}
+    for rises in (1, 0):
+        episode = make_episode("cook", 1)
+        try:
+            agent = episode.agent
+            agent.update(None, episode.environment.observe())
+            problem, module = agent.problem()
+            options = settings.solve_options(
+                time_limit=120, max_level=12, cheaper_rises=rises, progress=(said := []).append
+            )
+            sol = solve(agent.domain, agent.streams, problem, module, options)
+        finally:
+            episode.close()
+        assert sol.solved, sol.message
+        costs[rises] = sol.cost
+        rose = any("failed on its draws" in x for x in said)
+        assert rose == bool(rises)
+        if rises:
+            assert sol.level == sol.stats.levels[-1] - 1
+        else:
+            assert sol.level == sol.stats.levels[-1]
+    assert costs[1] == pytest.approx(costs[0])

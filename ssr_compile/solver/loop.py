@@ -124,6 +124,7 @@ class SolverLoop:
         if self.problem.metric is not None and not self.backend.capabilities.costs:
             sol.costs_ignored_by = self.backend.name
         sol.failed = self.failed_over_objects()
+        sol.level = self.level
         return sol
 
     def failed_over_objects(self) -> list[Instance]:

@@ -90,6 +90,9 @@ class Solution:
     # one output at most, that failed in this call: a replanning call evaluates them again
     # before it plans (ReplanState.recheck)
     failed: list = field(default_factory=list)
+    # the level the plan was found at (``None``: not recorded), which a level rise for a
+    # cheaper plan that found none leaves below the last iteration's
+    level: int | None = None
 
     @property
     def solved(self) -> bool:
