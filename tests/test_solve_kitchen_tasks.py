@@ -47,6 +47,27 @@ def test_stow_moves_the_sugar_box_before_closing_the_top_drawer(capsys):
     assert sugar_pick < push
 
 
+def _first_plan(task: str, seed: int, settings, **changes):
+    """The first cycle's plan of a kitchen episode with the policy's solver options (levels up
+    to 12, ``changes`` applied), and the solver's progress lines."""
+    from ssr_compile.streams.environments.kitchen import make_episode
+
+    from ssr_compile.solver import solve
+
+    said: list[str] = []
+    episode = make_episode(task, seed)
+    try:
+        agent = episode.agent
+        agent.update(None, episode.environment.observe())
+        problem, module = agent.problem()
+        options = settings.solve_options(
+            time_limit=120, max_level=12, progress=said.append, **changes
+        )
+        return solve(agent.domain, agent.streams, problem, module, options), said
+    finally:
+        episode.close()
+
+
 @pytest.mark.slow
 def test_the_policy_rises_a_level_for_a_cheaper_plan_than_one_levels_draws_left():
     """Stow, seed 3, the first cycle's plan: the plan that puts the block in the drawer
@@ -55,25 +76,12 @@ def test_the_policy_rises_a_level_for_a_cheaper_plan_than_one_levels_draws_left(
     that picks the block twice (put it down, move the sugar box, pick it again) holds.  The
     policy's attempts rise a level once for a cheaper plan (``cheaper_rises``): the draws come
     back, the first plan holds, picks the block once and costs less."""
-    from ssr_compile.streams.environments.kitchen import make_episode
-
     from ssr_compile.policy_settings import PolicySettings
-    from ssr_compile.solver import solve
 
     settings = PolicySettings()
     out = {}
     for rises in (settings.cheaper_rises, 0):
-        episode = make_episode("stow", 3)
-        try:
-            agent = episode.agent
-            agent.update(None, episode.environment.observe())
-            problem, module = agent.problem()
-            options = settings.solve_options(
-                time_limit=120, max_level=12, cheaper_rises=rises, progress=(said := []).append
-            )
-            sol = solve(agent.domain, agent.streams, problem, module, options)
-        finally:
-            episode.close()
+        sol, said = _first_plan("stow", 3, settings, cheaper_rises=rises)
         assert sol.solved, sol.message
         picks = [s.args[0] for s in sol.plan if s.name == "pick"]
         out[rises] = (sol.cost, picks, any("failed on its draws" in x for x in said))
@@ -90,25 +98,12 @@ def test_a_rise_that_finds_nothing_cheaper_reports_the_level_the_plan_was_found_
     answer is the plan kept at the level below.  The solution says where its plan was found
     (``Solution.level``), below the last iteration's level, and costs what it costs without
     the rise."""
-    from ssr_compile.streams.environments.kitchen import make_episode
-
     from ssr_compile.policy_settings import PolicySettings
-    from ssr_compile.solver import solve
 
     settings = PolicySettings()
     costs = {}
     for rises in (1, 0):
-        episode = make_episode("cook", 1)
-        try:
-            agent = episode.agent
-            agent.update(None, episode.environment.observe())
-            problem, module = agent.problem()
-            options = settings.solve_options(
-                time_limit=120, max_level=12, cheaper_rises=rises, progress=(said := []).append
-            )
-            sol = solve(agent.domain, agent.streams, problem, module, options)
-        finally:
-            episode.close()
+        sol, said = _first_plan("cook", 1, settings, cheaper_rises=rises)
         assert sol.solved, sol.message
         costs[rises] = sol.cost
         rose = any("failed on its draws" in x for x in said)
