@@ -206,7 +206,9 @@ class FastDownward(ExternalPlanner):
 
         self.binary = search_binary()
         self.last_operators: int | None = None  # ground actions of the last translated task
-        # the last task's negated axiom rules, as written and split, when it was split
+        # the last task's negated axiom rules as written (estimated, .fd_negation), and as
+        # written and split when it was split
+        self.last_negated_rules: float | None = None
         self.last_split: tuple[float, float] | None = None
 
     def _search_option(self, info: dict, cost_bound: float | None) -> str:
@@ -220,6 +222,7 @@ class FastDownward(ExternalPlanner):
 
     def before(self, domain: Domain, problem: Problem) -> None:
         self.last_operators = None
+        self.last_negated_rules = None
         self.last_split = None
 
     def refuse(self, domain: Domain, problem: Problem) -> str | None:
@@ -306,6 +309,7 @@ class FastDownward(ExternalPlanner):
                 log_path=log,
             )
             self._check_translation(job, status, info, log)
+            self.last_negated_rules = info["negated_rules"]
             if info["negated_rules"] > NEGATED_RULES:
                 status, info = self._translate_split(job, info, sas, log, invariants)
             job.stages["translate"] = time.perf_counter() - began
