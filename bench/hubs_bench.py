@@ -94,20 +94,31 @@ def solve_once(captured: tuple, with_hubs: bool) -> dict:
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def episode_arguments(description: str, default_time: float, extra=None) -> argparse.Namespace:
+    """The arguments of a bench that captures one episode's task and solves it both ways:
+    --task, --seed, --time-limit (``default_time``, 300 s with --full), --runs (3, 5 with
+    --full); ``extra(ap)`` adds a script's own."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--task", default="cook", help="kitchen task or task file (default cook)")
     ap.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
     ap.add_argument(
-        "--time-limit", type=float, default=None, help="planning time of the episode (120 s)"
-    )
+        "--time-limit", type=float, default=None,
+        help=f"planning time of the episode ({default_time:g} s)",
+    )  # fmt: skip
     ap.add_argument("--runs", type=int, default=None, help="planner runs each way (default 3)")
     ap.add_argument("--full", action="store_true", help="300 s of the episode and 5 runs each way")
+    if extra is not None:
+        extra(ap)
     args = ap.parse_args()
     if args.time_limit is None:
-        args.time_limit = 300.0 if args.full else 120.0
+        args.time_limit = 300.0 if args.full else default_time
     if args.runs is None:
         args.runs = 5 if args.full else 3
+    return args
+
+
+def main() -> None:
+    args = episode_arguments(__doc__.splitlines()[0], 120.0)
     captured = capture(args.task, args.seed, args.time_limit)
     if captured is None:
         print("no planner call was made")

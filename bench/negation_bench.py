@@ -79,22 +79,14 @@ def solve_once(captured: tuple, split: bool, time_limit: float) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--task", default="cook", help="kitchen task or task file (default cook)")
-    ap.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
-    ap.add_argument(
-        "--time-limit", type=float, default=None, help="planning time of the episode (60 s)"
-    )
-    ap.add_argument("--runs", type=int, default=None, help="planner runs each way (default 3)")
-    ap.add_argument("--full", action="store_true", help="300 s of the episode and 5 runs each way")
-    ap.add_argument(
-        "--planner-limit", type=float, default=300.0, help="time limit of each run (300 s)"
-    )
-    args = ap.parse_args()
-    if args.time_limit is None:
-        args.time_limit = 300.0 if args.full else 60.0
-    if args.runs is None:
-        args.runs = 5 if args.full else 3
+    from hubs_bench import episode_arguments  # bench/, beside this script
+
+    def planner_limit(ap: argparse.ArgumentParser) -> None:
+        ap.add_argument(
+            "--planner-limit", type=float, default=300.0, help="time limit of each run (300 s)"
+        )
+
+    args = episode_arguments(__doc__.splitlines()[0], 60.0, planner_limit)
     captured = capture(args.task, args.seed, args.time_limit)
     if captured is None:
         print("fd was not called")
