@@ -52,7 +52,7 @@ def build_scene(cid: int, n_occluders: int, rng: np.random.Generator) -> dict[in
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument(
         "--full", action="store_true", help="more repeats and occluder counts (default: quick)"
     )

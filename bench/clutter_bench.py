@@ -180,7 +180,7 @@ def print_rows(rows: list[dict]) -> None:
 def main(argv: list[str] | None = None) -> int:
     from ssr_compile.cli.options import seed_list
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kind", choices=("cook", "inspect"), default="cook")
     ap.add_argument("--objects", type=int, nargs="+", default=[2, 4, 6], metavar="N")
     ap.add_argument("--hiders", type=int, nargs="+", default=[1, 2], metavar="K")

@@ -77,7 +77,7 @@ def seeds_of(text: str) -> list[int]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tasks", default="inspect,stow,swap,cook", help="kitchen tasks or files")
     ap.add_argument("--seeds", default=None, help="seeds: 0-4, or 1,3,8 (default 0-4)")
     ap.add_argument("--full", action="store_true", help="the long version: seeds 0-24")

@@ -118,7 +118,7 @@ def episode_arguments(description: str, default_time: float, extra=None) -> argp
 
 
 def main() -> None:
-    args = episode_arguments(__doc__.splitlines()[0], 120.0)
+    args = episode_arguments(__doc__.split("\n\n")[0], 120.0)
     captured = capture(args.task, args.seed, args.time_limit)
     if captured is None:
         print("no planner call was made")

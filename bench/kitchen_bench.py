@@ -117,7 +117,7 @@ def seeds(text: str) -> list[int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tasks", nargs="+", default=["inspect"], choices=TASKS)
     ap.add_argument("--variants", nargs="+", default=["both"], choices=list(VARIANTS))
     ap.add_argument("--seeds", type=seeds, default=[0], help="e.g. 0-9 or 0,3,5")

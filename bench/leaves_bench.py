@@ -46,7 +46,7 @@ def first_plan(task: str, seed: int, leaves: bool) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=None, help="runs each way (default 1)")
     ap.add_argument("--tasks", default=None, help="kitchen tasks, comma-separated (default cook)")
     ap.add_argument("--seed", type=int, default=1, help="episode seed (default 1)")

@@ -86,7 +86,7 @@ def main() -> None:
             "--planner-limit", type=float, default=300.0, help="time limit of each run (300 s)"
         )
 
-    args = episode_arguments(__doc__.splitlines()[0], 60.0, planner_limit)
+    args = episode_arguments(__doc__.split("\n\n")[0], 60.0, planner_limit)
     captured = capture(args.task, args.seed, args.time_limit)
     if captured is None:
         print("fd was not called")

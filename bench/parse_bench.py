@@ -58,7 +58,7 @@ def pddl_parsers() -> dict[str, Callable[[str], object]] | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("dir", nargs="?", type=Path, default=None)
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--full", action="store_true", help="the pddlstream example corpus")

@@ -124,7 +124,7 @@ HEADER = (
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", default=None, help="seeds, e.g. 0-9 (default 0-9; --full: 0-24)")
     ap.add_argument("--full", action="store_true", help="the long version: seeds 0-24")
     ap.add_argument("--only", action="append", default=[], help="a problem name, e.g. tight(2)")

@@ -56,7 +56,7 @@ def cell(command: str, example: str, problem: str, planner: str, limit: float) -
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--full", action="store_true", help="also the kitchen's tasks (minutes)")
     ap.add_argument("--time-limit", type=float, default=120.0, help="per cell (default 120 s)")
     ap.add_argument(

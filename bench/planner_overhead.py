@@ -51,7 +51,7 @@ def make(spec: str):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("specs", nargs="*", default=DEFAULT_SPECS)
     ap.add_argument("--calls", type=int, default=None, help="calls per cell (default 10)")
     ap.add_argument("--full", action="store_true", help="30 calls per cell")

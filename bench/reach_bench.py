@@ -67,7 +67,7 @@ def run(w, pairs, seed: int, check: bool) -> dict:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--placements", type=int, default=15, help="placements per drawer (15)")
     ap.add_argument("--seed", type=int, default=0, help="seed of the placements and the bases")
     ap.add_argument("--rounds", type=int, default=2, help="times each side runs, in turn (2)")

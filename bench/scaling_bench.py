@@ -112,7 +112,7 @@ def run_once(n: int, args, algorithm: str = "focused") -> tuple:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=None, help="numbers of blocks")
     ap.add_argument("--runs", type=int, default=None, help="runs per size (medians)")
     ap.add_argument("--time-limit", type=float, default=None, help="per solve, seconds")

@@ -168,7 +168,7 @@ def selected(name: str, problem: str, only: list[str]) -> bool:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=None, help="runs per cell (default 1)")
     ap.add_argument(
         "--full", action="store_true", help="5 runs per cell, and the kitchen's tasks too"

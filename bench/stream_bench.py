@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> None:
     import argparse
 
     global N
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--full", action="store_true", help="100 calls per stream (default 20)")
     N = 100 if ap.parse_args(argv).full else N
     w = World()

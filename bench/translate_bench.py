@@ -154,7 +154,7 @@ def replay(folders: list[Path], settings: list[str], runs: int) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--capture", type=Path, help="capture an episode's tasks into this folder")
     ap.add_argument("--replay", type=Path, nargs="+", help="replay the tasks of these folders")
     ap.add_argument("--task", default="swap", help="kitchen task to capture (default swap)")

@@ -63,7 +63,7 @@ def timed(fn, *args, **kwargs) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--calls", type=int, default=None, help="calls per problem (default 5)")
     ap.add_argument("--problems", default=None, help="comma-separated example/problem filters")
     ap.add_argument("--full", action="store_true", help="every shipped problem, 9 calls each")
