@@ -92,7 +92,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
         self.failed_places: list[tuple[str, PoseBelief]] = []
         # arm motions the true world stopped: (base, where the arm stopped, the configuration
         # that collided), recorded by the agent (see :meth:`blocked`)
-        self.collided: list[tuple[tuple, tuple, tuple]] = []
+        self.collided: list[tuple[tuple, tuple, tuple, str | None]] = []
         # what the robot holds now (object, grasp) and its arm configuration (the same)
         self.holding: tuple[str, Grasp] | None = None
         self.arm_now: tuple[float, ...] | None = None

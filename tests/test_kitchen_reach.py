@@ -473,12 +473,16 @@ def test_an_arm_motion_the_world_stopped_is_not_planned_again():
                                values=(base, path[0], path, path[-1]))  # fmt: skip
         obs = SimpleNamespace(ok=False, arm=path[3], base=base, held=None, stove_on=False)
         agent._collided(step, path[0], obs)
-        ((b, stop, hit),) = km.collided
-        assert np.allclose(stop, path[3]) and np.allclose(hit, path[4])
+        ((b, stop, hit, held),) = km.collided
+        assert np.allclose(stop, path[3]) and np.allclose(hit, path[4]) and held is None
         test = km.blocked(base)
         assert test(np.asarray(path[4])) and test(np.asarray(path[5]))
         assert not test(np.asarray(path[3]))  # the arm can leave where it stopped
         assert km.blocked((base[0] + 0.2, base[1], base[2])) is None  # another base
+        # what the empty hand's motion hit says nothing of the motions with the block in it
+        km.holding = ("block", None)
+        assert km.blocked(base) is None
+        km.holding = None
         (motion,) = km.plan_arm_motion(base, path[3], path[-1])
         for q in motion:
             q = np.asarray(q)
@@ -607,3 +611,36 @@ def test_a_reach_no_base_can_make_ends_the_inv_reach_stream(cook0):
         assert not gen.exhausted
         if out is not None:  # a base that really reaches the grasp
             assert ks.inv_kin("cracker_box", p, others[0], out[0]) is not None
+
+
+def test_a_motion_refused_with_one_object_in_hand_is_refused_only_with_that_object():
+    # The cluttered kitchen (cook, 8 objects, 6 boxes, seed 2): three carry motions with a box
+    # in the hand hit other boxes and were refused around the carry configuration; later,
+    # with the block in the hand, every motion to carry was refused as well, and the robot
+    # moved its arm from one reach configuration to the next for 40 cycles.
+    from types import SimpleNamespace
+
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.streams.environments.kitchen import make_episode
+
+    episode = make_episode("cook", 0)
+    try:
+        agent, env = episode.agent, episode.environment
+        agent.update(None, env.observe())
+        km = agent.km
+        base = agent.known.base
+        tuck, carry = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
+        path = tuple(tuple(tuck + (carry - tuck) * k / 10) for k in range(11))
+        agent.known.held = ("sugar_box", None)  # as the agent knows it after a pick
+        step = SimpleNamespace(name="move-arm", args=("bq0", "aq0", "t-1", "aq-carry"),
+                               values=(base, path[0], path, path[-1]))  # fmt: skip
+        obs = SimpleNamespace(ok=False, arm=path[8], base=base, held="sugar_box", stove_on=False)
+        agent._collided(step, path[0], obs)
+        assert km.collided[0][3] == "sugar_box"
+        for holding, refused in ((("sugar_box", None), True), (("block", None), False),
+                                 (None, False)):  # fmt: skip
+            km.holding = holding
+            test = km.blocked(base)
+            assert (test is not None and test(np.asarray(path[9]))) == refused, holding
+    finally:
+        episode.close()

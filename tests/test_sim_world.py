@@ -257,6 +257,9 @@ def test_an_arm_motion_starting_near_an_object_leaves_it_first(monkeypatch):
     from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.sim.tasks import make_task
 
+    # the rule alone: no clearance kept elsewhere (see the next test)
+    monkeypatch.setattr(samplers, "ROBOT_CLEARANCE", 0.0)
+    monkeypatch.setattr(samplers, "HELD_CLEARANCE", 0.0)
     task = make_task("cook", 0)
     try:
         w = task.world
@@ -320,3 +323,77 @@ def test_an_object_released_slightly_tilted_settles_upright(scene):
     # too high above the counter, even upright: it would fall, not rest
     high = multiply(frame, pose((rest[0][0], rest[0][1], rest[0][2] + 0.05), rest[1]))
     assert scene.stable_on("cracker_box", "counter", high, 0.02) is None
+
+
+@pytest.mark.parametrize("held", [False, True], ids=["arm", "held-object"])
+def test_an_arm_motion_keeps_its_clearance_between_its_ends(monkeypatch, held):
+    # The planning world puts objects at estimates, and the held object where the plan
+    # grasped it: a path that grazes one hits the true object (the cluttered kitchen executed
+    # three carry motions in a row that collided with boxes the robot had localized).  Away
+    # from its ends a motion keeps ROBOT_CLEARANCE between the arm and the localized objects,
+    # and HELD_CLEARANCE between what it holds and everything.
+    import ssr_compile.sim.samplers as samplers
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.sim.tasks import make_task
+
+    monkeypatch.setattr(samplers, "NEAR", 0.0)  # this rule alone (the previous test: that one)
+    task = make_task("cook", 0)
+    try:
+        w = task.world
+        base = w.robot.get_base()
+        start, goal = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
+        straight = [np.asarray(q) for q in refine([start, goal], samplers.ARM_RESOLUTION)]
+        middle = [
+            q for q in straight if min(np.max(np.abs(q - start)), np.max(np.abs(q - goal))) > 0.3
+        ]
+        mid = 0.5 * (start + goal)
+        if held:  # the block in the hand, the sugar box beside its way
+            w.grab("block", ((0.0, 0.0, 0.03), (0.0, 0.0, 0.0, 1.0)))
+            name, want = "sugar_box", samplers.HELD_CLEARANCE
+        else:
+            name, want = "block", samplers.ROBOT_CLEARANCE
+        other = w.objects[name]
+        w.set_arm(mid)
+        mover = w.object_pose("block")[0] if held else w.robot.tool_pose()[0]
+        counter = invert(w.surface_frame("counter"))
+
+        def clearance(q) -> float:
+            w.set_arm(q)
+            return w.mover_clearances(0.05).get((held, other), 0.05)
+
+        placed = None
+        for way in ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0)):
+            for off in np.arange(0.02, 0.3, 0.002):  # the object a few mm beside the way
+                at = (tuple(np.asarray(mover) + off * np.asarray(way)), (0.0, 0.0, 0.0, 1.0))
+                w.place_object(name, "counter", multiply(counter, at))
+                near = min(clearance(q) for q in middle)
+                if 0.003 < near < want - 0.003 and not any(
+                    (w.set_arm(q), w.robot_collision())[1] for q in straight
+                ):
+                    placed = near
+                    break
+            if placed is not None:
+                break
+        assert placed is not None
+        w.set_arm(start)
+
+        def between_ends(rule: bool) -> list[float]:
+            for k in ("ROBOT_CLEARANCE", "HELD_CLEARANCE"):
+                monkeypatch.setattr(samplers, k, want if rule else 0.0)
+            ks = samplers.KitchenStreams(w, np.random.default_rng(0))
+            out = ks.plan_arm_motion(base, ARM_TUCK, ARM_CARRY)
+            assert out is not None
+            got = [
+                clearance(q)
+                for q in out[0]
+                if min(np.max(np.abs(np.asarray(q) - end)) for end in (start, goal))
+                > samplers.ESCAPE
+            ]
+            w.set_arm(start)
+            return got
+
+        assert min(between_ends(True)) >= want - 1e-6
+        # without it, the path grazes the estimate
+        assert min(between_ends(False)) < want - 0.002
+    finally:
+        task.close()

@@ -315,8 +315,8 @@ class KitchenAgent:
 
     def _collided(self, step: Step, arm_before, obs: KitchenObservation) -> None:
         """An arm motion the true world stopped: the configuration after the one where the arm
-        stopped (as the robot executed the path) collided; arm motions at this base avoid it
-        from now on (:meth:`KitchenModule.blocked`)."""
+        stopped (as the robot executed the path) collided; arm motions at this base with the
+        same object in the hand (or none) avoid it from now on (:meth:`KitchenModule.blocked`)."""
         action = to_action(step.name, step.values, arm_before)
         path = np.asarray(action.path, float)
         if len(path) < 2:
@@ -324,7 +324,9 @@ class KitchenAgent:
         stop = np.asarray(obs.arm, float)
         i = int(np.argmin(np.max(np.abs(path - stop), axis=1)))
         hit = path[min(i + 1, len(path) - 1)]
-        self.km.collided.append((tuple(obs.base), tuple(obs.arm), tuple(float(v) for v in hit)))
+        held = None if self.known is None or self.known.held is None else self.known.held[0]
+        hit = tuple(float(v) for v in hit)
+        self.km.collided.append((tuple(obs.base), tuple(obs.arm), hit, held))
 
     def _arrange(self) -> None:
         """The planning world as the robot knows it: its configuration, the drawers, the object
