@@ -91,7 +91,8 @@ class KitchenModule(MotionStreams, BeliefStreams):
         # placements the true world refused (object, point belief), recorded by the agent
         self.failed_places: list[tuple[str, PoseBelief]] = []
         # arm motions the true world stopped: (base, where the arm stopped, the configuration
-        # that collided), recorded by the agent (see :meth:`blocked`)
+        # that collided, the object in the hand or None), recorded by the agent (see
+        # :meth:`blocked`)
         self.collided: list[tuple[tuple, tuple, tuple, str | None]] = []
         # what the robot holds now (object, grasp) and its arm configuration (the same)
         self.holding: tuple[str, Grasp] | None = None
