@@ -20,6 +20,7 @@ import numpy as np
 import pybullet as pb
 
 from .actions import DrawerMotion, MoveArm, MoveBase, Pick, Place, Press
+from .clearance import leaving_test, too_near_test
 from .geometry import (
     Pose,
     bases_near,
@@ -106,15 +107,6 @@ ESCAPE = 0.15
 # approached, within ESCAPE of the start -- by more than LEAVE_TOL (see plan_arm_motion).
 NEAR = 0.03
 LEAVE_TOL = 0.001
-# Metres an arm motion keeps, away from its ends, between the arm and the objects the robot
-# has localized, and between what it holds and anything: the planning world puts objects at
-# estimates that may be a centimetre off, and the held object where the plan grasped it (a
-# pick succeeds up to 2 cm off).  Paths planned at zero clearance hit the true objects: the
-# cluttered kitchen (cook, 8 objects, 6 boxes, seed 2) executed three carry motions in a row
-# that collided with boxes the robot had localized, each replanned around the last hit.
-# Within ESCAPE of either end a motion may be as near an object as that end is.
-ROBOT_CLEARANCE = 0.01
-HELD_CLEARANCE = 0.02
 # A side grasp whose hand would move in along a bearing further than this from +x (the way the
 # robot faces the counter and the drawers) is out of the arm's reach from every base: 0 of 400
 # sampled bases reached one on Cook seeds 0-2 (1.86 to 2.97 rad), against 12-80% of the
@@ -511,10 +503,9 @@ class KitchenStreams:
         ``q1`` itself collides (the arm stopped where the estimate puts an object it did not
         touch), the path may leave it, no deeper, and is not checked otherwise there -- else no
         motion ever starts there ("no relaxed solution" after an arm motion stopped short of
-        the block).  Elsewhere it keeps :data:`ROBOT_CLEARANCE` from the localized objects and
-        what it holds :data:`HELD_CLEARANCE` from everything, but within :data:`ESCAPE` of
-        either end, where it may be as near as that end is.  ``blocked``: configurations to
-        treat as colliding besides (what the true world refused)."""
+        the block).  Elsewhere it keeps its distance (:mod:`.clearance`; within :data:`ESCAPE`
+        of either end as near as that end is).  ``blocked``: configurations to treat as
+        colliding besides (what the true world refused)."""
         w = self.world
         r = w.robot
         with w.saved():
@@ -522,30 +513,8 @@ class KitchenStreams:
             check = self._arm_collision_fn(base)
             start = np.asarray(q1, float)
             stuck = check(start)
-            w.set_arm(start)
-            near = w.robot_clearances(NEAR)
-
-            def leaving(q: np.ndarray) -> bool:
-                w.set_arm(q)
-                now = w.robot_clearances(NEAR)
-                return all(now.get(b, NEAR) >= d0 - LEAVE_TOL for b, d0 in near.items())
-
-            reach = max(ROBOT_CLEARANCE, HELD_CLEARANCE)
-            ends = []
-            for end in (start, np.asarray(q2, float)):
-                w.set_arm(end)
-                ends.append((end, w.mover_clearances(reach)))
-
-            def too_near(q: np.ndarray) -> bool:
-                w.set_arm(q)
-                for key, d in w.mover_clearances(reach).items():
-                    want = HELD_CLEARANCE if key[0] else ROBOT_CLEARANCE
-                    for end, there in ends:
-                        if float(np.max(np.abs(q - end))) <= ESCAPE:
-                            want = min(want, there.get(key, reach) - LEAVE_TOL)
-                    if d < want:
-                        return True
-                return False
+            near, leaving = leaving_test(w, start, NEAR, LEAVE_TOL)
+            too_near = too_near_test(w, (start, np.asarray(q2, float)), ESCAPE, LEAVE_TOL)
 
             def collision(q: np.ndarray) -> bool:
                 q = np.asarray(q, float)

@@ -618,26 +618,6 @@ class World:
                         out[body] = pt[8]
         return out
 
-    def mover_clearances(self, reach: float) -> dict[tuple[bool, int], float]:
-        """The smallest signed distance below ``reach`` from the robot (key ``(False,
-        body)``) to each movable object present, and from what it holds (``(True, body)``)
-        to every obstacle, the robot's base included."""
-        c = self.client
-        movable = {b for n, b in self.objects.items() if self.support[n] is not None}
-        out: dict[tuple[bool, int], float] = {}
-        pairs = [(self.robot.body, b, False, None) for b in self.obstacles() if b in movable]
-        if self.held is not None:
-            hb = self.objects[self.held.obj]
-            pairs += [(hb, b, True, None) for b in self.obstacles()]
-            pairs.append((hb, self.robot.body, True, self.robot.base_link))
-        for a, b, held, link in pairs:
-            kw = {} if link is None else {"linkIndexB": link}
-            for pt in p.getClosestPoints(a, b, reach, physicsClientId=c, **kw):
-                key = (held, b)
-                if pt[8] < out.get(key, reach):
-                    out[key] = pt[8]
-        return out
-
     def robot_contacts(self) -> list[str]:
         """What the robot (or what it holds) touches now, by name (for messages)."""
         names = {self.floor: "floor", self.counter: "counter", self.stove: "stove"}

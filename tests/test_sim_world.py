@@ -253,13 +253,14 @@ def test_an_arm_motion_starting_near_an_object_leaves_it_first(monkeypatch):
     # may touch it.  Near the start the path must not come closer to it (Cook seed 3 without
     # plan constraints: after a placement beside the sugar box, every motion planned past the
     # estimated box hit the true one at its first waypoint, until no plan was left).
+    # the rule alone: no clearance kept elsewhere (see the next test)
+    import ssr_compile.sim.clearance as clearance
     import ssr_compile.sim.samplers as samplers
     from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.sim.tasks import make_task
 
-    # the rule alone: no clearance kept elsewhere (see the next test)
-    monkeypatch.setattr(samplers, "ROBOT_CLEARANCE", 0.0)
-    monkeypatch.setattr(samplers, "HELD_CLEARANCE", 0.0)
+    monkeypatch.setattr(clearance, "ROBOT_CLEARANCE", 0.0)
+    monkeypatch.setattr(clearance, "HELD_CLEARANCE", 0.0)
     task = make_task("cook", 0)
     try:
         w = task.world
@@ -332,6 +333,7 @@ def test_an_arm_motion_keeps_its_clearance_between_its_ends(monkeypatch, held):
     # three carry motions in a row that collided with boxes the robot had localized).  Away
     # from its ends a motion keeps ROBOT_CLEARANCE between the arm and the localized objects,
     # and HELD_CLEARANCE between what it holds and everything.
+    import ssr_compile.sim.clearance as clearance
     import ssr_compile.sim.samplers as samplers
     from ssr_compile.sim.robot import ARM_CARRY
     from ssr_compile.sim.tasks import make_task
@@ -349,24 +351,24 @@ def test_an_arm_motion_keeps_its_clearance_between_its_ends(monkeypatch, held):
         mid = 0.5 * (start + goal)
         if held:  # the block in the hand, the sugar box beside its way
             w.grab("block", ((0.0, 0.0, 0.03), (0.0, 0.0, 0.0, 1.0)))
-            name, want = "sugar_box", samplers.HELD_CLEARANCE
+            name, want = "sugar_box", clearance.HELD_CLEARANCE
         else:
-            name, want = "block", samplers.ROBOT_CLEARANCE
+            name, want = "block", clearance.ROBOT_CLEARANCE
         other = w.objects[name]
         w.set_arm(mid)
         mover = w.object_pose("block")[0] if held else w.robot.tool_pose()[0]
         counter = invert(w.surface_frame("counter"))
 
-        def clearance(q) -> float:
+        def gap(q) -> float:
             w.set_arm(q)
-            return w.mover_clearances(0.05).get((held, other), 0.05)
+            return clearance.mover_clearances(w, 0.05).get((held, other), 0.05)
 
         placed = None
         for way in ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0)):
             for off in np.arange(0.02, 0.3, 0.002):  # the object a few mm beside the way
                 at = (tuple(np.asarray(mover) + off * np.asarray(way)), (0.0, 0.0, 0.0, 1.0))
                 w.place_object(name, "counter", multiply(counter, at))
-                near = min(clearance(q) for q in middle)
+                near = min(gap(q) for q in middle)
                 if 0.003 < near < want - 0.003 and not any(
                     (w.set_arm(q), w.robot_collision())[1] for q in straight
                 ):
@@ -379,12 +381,12 @@ def test_an_arm_motion_keeps_its_clearance_between_its_ends(monkeypatch, held):
 
         def between_ends(rule: bool) -> list[float]:
             for k in ("ROBOT_CLEARANCE", "HELD_CLEARANCE"):
-                monkeypatch.setattr(samplers, k, want if rule else 0.0)
+                monkeypatch.setattr(clearance, k, want if rule else 0.0)
             ks = samplers.KitchenStreams(w, np.random.default_rng(0))
             out = ks.plan_arm_motion(base, ARM_TUCK, ARM_CARRY)
             assert out is not None
             got = [
-                clearance(q)
+                gap(q)
                 for q in out[0]
                 if min(np.max(np.abs(np.asarray(q) - end)) for end in (start, goal))
                 > samplers.ESCAPE
