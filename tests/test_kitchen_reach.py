@@ -448,29 +448,38 @@ def test_drawer_bases_are_sampled_beside_the_drawers_axis():
         task.close()
 
 
+def _carry_episode():
+    """The Cook episode after its first look, and a straight arm path tuck -> carry of 11
+    waypoints: ``(episode, agent, km, base, path, step)``, ``step`` that path as a move-arm."""
+    from types import SimpleNamespace
+
+    from ssr_compile.sim.robot import ARM_CARRY
+    from ssr_compile.streams.environments.kitchen import make_episode
+
+    episode = make_episode("cook", 0)
+    agent, env = episode.agent, episode.environment
+    agent.update(None, env.observe())
+    base = agent.known.base
+    tuck, carry = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
+    path = tuple(tuple(tuck + (carry - tuck) * k / 10) for k in range(11))
+    step = SimpleNamespace(name="move-arm", args=("bq0", "aq0", "t-1", "aq-carry"),
+                           values=(base, path[0], path, path[-1]))  # fmt: skip
+    return episode, agent, agent.km, base, path, step
+
+
 def test_an_arm_motion_the_world_stopped_is_not_planned_again():
     # Cook seed 5 executed one carry motion 90 times: the true world stopped the arm at the
     # same waypoint each time (the planning world did not know what it hit), and the motion
     # stream, asked again from where the arm stood, planned through it again.
     from types import SimpleNamespace
 
-    from ssr_compile.sim.robot import ARM_CARRY
-    from ssr_compile.streams.environments.kitchen import make_episode
     from ssr_compile.streams.kitchen_motion import BLOCKED
 
-    episode = make_episode("cook", 0)
+    episode, agent, km, base, path, step = _carry_episode()
     try:
-        agent, env = episode.agent, episode.environment
-        agent.update(None, env.observe())
-        km = agent.km
-        base = agent.known.base
-        tuck, carry = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
-        path = tuple(tuple(tuck + (carry - tuck) * k / 10) for k in range(11))
         assert km.plan_arm_motion(base, path[3], path[-1]) is not None
         assert km.blocked(base) is None  # nothing refused yet
         # the world stopped the arm at waypoint 3 of the path: waypoint 4 collided
-        step = SimpleNamespace(name="move-arm", args=("bq0", "aq0", "t-1", "aq-carry"),
-                               values=(base, path[0], path, path[-1]))  # fmt: skip
         obs = SimpleNamespace(ok=False, arm=path[3], base=base, held=None, stove_on=False)
         agent._collided(step, path[0], obs)
         ((b, stop, hit, held),) = km.collided
@@ -620,20 +629,9 @@ def test_a_motion_refused_with_one_object_in_hand_is_refused_only_with_that_obje
     # moved its arm from one reach configuration to the next for 40 cycles.
     from types import SimpleNamespace
 
-    from ssr_compile.sim.robot import ARM_CARRY
-    from ssr_compile.streams.environments.kitchen import make_episode
-
-    episode = make_episode("cook", 0)
+    episode, agent, km, base, path, step = _carry_episode()
     try:
-        agent, env = episode.agent, episode.environment
-        agent.update(None, env.observe())
-        km = agent.km
-        base = agent.known.base
-        tuck, carry = np.asarray(ARM_TUCK, float), np.asarray(ARM_CARRY, float)
-        path = tuple(tuple(tuck + (carry - tuck) * k / 10) for k in range(11))
         agent.known.held = ("sugar_box", None)  # as the agent knows it after a pick
-        step = SimpleNamespace(name="move-arm", args=("bq0", "aq0", "t-1", "aq-carry"),
-                               values=(base, path[0], path, path[-1]))  # fmt: skip
         obs = SimpleNamespace(ok=False, arm=path[8], base=base, held="sugar_box", stove_on=False)
         agent._collided(step, path[0], obs)
         assert km.collided[0][3] == "sugar_box"
