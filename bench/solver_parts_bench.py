@@ -97,7 +97,8 @@ def _instantiation_key(out) -> object:
         sorted((k, str(v.instance)) for k, v in out.objects.items()),
         sorted((str(k), [str(r.instance) for r in v]) for k, v in out.facts.items()),
         out.saturated,
-        sorted(str(a) for a in out.negated),
+        # the stream predicates whose absent atoms a plan may have checked (made lazily)
+        sorted(getattr(out.negated, "preds", out.negated)),
         sorted(out.merged),
         sorted(out.shared),
     )

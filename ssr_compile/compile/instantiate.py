@@ -18,14 +18,15 @@ plans map back unchanged.
 from __future__ import annotations
 
 import itertools
-from collections import Counter, defaultdict
+from collections import Counter
 from collections.abc import Container, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from .. import syntax as S
 from ..errors import InstanceCapReached, UnsupportedError
-from ..formulas import atoms, unify
+from ..formulas import atoms
+from .join import FactIndex, _eq_holds, _matches, facts_by_predicate
 from .predicates import optimistic_truth, predicate_tests
 from .relevance import distinct_inputs
 from .result import PassResult
@@ -187,7 +188,7 @@ def instantiate(
     real_function_values = dict(real_function_values or {})
     taken = {o.name for o in problem.objects} | {c.name for c in domain.constants}
     levels: dict[S.Atom, int] = {}
-    index: dict[str, list[S.Atom]] = defaultdict(list)
+    index = FactIndex()
     position: dict[S.Atom, int] = {}  # where each fact sits in its index list
 
     def add_fact(atom: S.Atom, lvl: int) -> bool:
@@ -195,7 +196,7 @@ def instantiate(
             return False
         if atom not in levels:
             position[atom] = len(index[atom.pred])
-            index[atom.pred].append(atom)
+            index.add(atom)
         levels[atom] = lvl
         return True
 
@@ -332,7 +333,7 @@ def instantiate(
         _apply_rules(streams, index, add_fact, levels)
         if not made:
             break
-        fresh = [a for a, lvl in levels.items() if lvl == depth]
+        fresh = facts_by_predicate(a for a, lvl in levels.items() if lvl == depth)
     else:
         # The loop ran to the limit: were more instances possible (through the facts of the
         # last depth)?
@@ -510,13 +511,13 @@ def real_instances(
     alone: the problem's and those of the ``evaluated`` results.  Functions first, each in the
     order of a join over the facts."""
     levels: dict[S.Atom, int] = {}
-    index: dict[str, list[S.Atom]] = defaultdict(list)
+    index = FactIndex()
 
     def add_fact(atom: S.Atom, lvl: int) -> bool:
         if atom in levels:
             return False
         levels[atom] = lvl
-        index[atom.pred].append(atom)
+        index.add(atom)
         return True
 
     for fact in problem.init:
@@ -611,62 +612,3 @@ def ground_atom(atom: S.Atom, binding: Mapping[str, str]) -> S.Atom:
             S.const(binding.get(t.name, t.name)) if isinstance(t, S.Var) else t for t in atom.args
         ),
     )
-
-
-def _matches(params, domain, index, levels, fresh=None):
-    """All bindings of ``params`` under which every atom of the conjunctive ``domain`` holds.
-
-    Yields ``(binding, facts)``.  Equality atoms compare the bound names.  Parameters that
-    no atom mentions cannot be bound and give no match (as in PDDLStream).  With ``fresh``
-    (a list of facts), only the bindings that use at least one of them (a binding may come
-    more than once: the callers skip instances already seen).
-    """
-    atoms = [a for a in S.conjuncts(domain)]
-    for a in atoms:
-        if not isinstance(a, S.Atom):
-            raise UnsupportedError(
-                f"stream domains must be conjunctions of atoms; found {type(a).__name__.lower()}",
-                line=getattr(a.span, "line", None),
-                col=getattr(a.span, "col", None),
-            )
-    positive = [a for a in atoms if a.pred != "="]
-    equalities = [a for a in atoms if a.pred == "="]
-    names = [p.name for p in params]
-
-    def extend(order, i: int, binding: dict[str, str], used: list[S.Atom]):
-        if i == len(order):
-            if all(n in binding for n in names) and all(_eq_holds(e, binding) for e in equalities):
-                yield dict(binding), list(used)
-            return
-        pattern = order[i]
-        for fact in list(index.get(pattern.pred, ())):
-            new = unify(pattern, fact, binding)
-            if new is not None:
-                used.append(fact)
-                yield from extend(order, i + 1, new, used)
-                used.pop()
-
-    # Most selective atoms first; facts are yielded in this order.
-    order = sorted(positive, key=lambda a: len(index.get(a.pred, ())))
-    if fresh is None:
-        yield from extend(order, 0, {}, [])
-        return
-    by_pred: dict[str, list[S.Atom]] = defaultdict(list)
-    for f in fresh:
-        by_pred[f.pred].append(f)
-    for k, pivot in enumerate(order):
-        rest = order[:k] + order[k + 1 :]
-        for fact in by_pred.get(pivot.pred, ()):
-            start = unify(pivot, fact, {})
-            if start is None:
-                continue
-            for binding, used in extend(rest, 0, start, []):
-                used.insert(k, fact)
-                yield binding, used
-
-
-def _eq_holds(atom: S.Atom, binding: dict[str, str]) -> bool:
-    left, right = (
-        binding.get(t.name, t.name) if isinstance(t, S.Var) else t.name for t in atom.args
-    )
-    return left == right

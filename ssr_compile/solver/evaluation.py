@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import defaultdict
 from dataclasses import replace
 from typing import Any
 
@@ -19,6 +18,7 @@ from ..compile.instantiate import (
     real_instances,
     real_parts,
 )
+from ..compile.join import FactIndex, facts_by_predicate
 from ..compile.predicates import predicate_tests
 from ..errors import StreamError, StreamFailure
 from ..stream import Generator, StreamsModule, ValueTable, call_function, call_test
@@ -234,7 +234,7 @@ class RealJoin:
 
     def _reset(self) -> None:
         self.levels: dict[S.Atom, int] = {}
-        self.index: dict[str, list[S.Atom]] = defaultdict(list)
+        self.index = FactIndex()
         self.found: list[Instance] = []
         self.known: set[Instance] = set()
         self.seen: list[Result] = []  # the results joined, by identity
@@ -243,7 +243,7 @@ class RealJoin:
     def _add(self, atom: S.Atom, fresh: list[S.Atom]) -> None:
         if atom not in self.levels:
             self.levels[atom] = 0
-            self.index[atom.pred].append(atom)
+            self.index.add(atom)
             fresh.append(atom)
 
     def instances(self, results: list[Result]) -> list[Instance]:
@@ -268,7 +268,7 @@ class RealJoin:
         self.seen.extend(results[n:])
         if not fresh and self.started:
             return self.found
-        pivots = None if not self.started else fresh
+        pivots = None if not self.started else facts_by_predicate(fresh)
         self.started = True
         for name, params, domain, kind in self.parts:
             for binding, _facts in _matches(params, domain, self.index, self.levels, pivots):

@@ -25,6 +25,9 @@ from ..formulas import unify
 
 Plan = Sequence[tuple[str, Sequence[str]]]
 
+# How deep a guard follows derived atoms into the axioms they rest on (:meth:`_guards`)
+EXPAND_DEPTH = 4
+
 
 class PlanInvalid(SSRError):
     """The plan does not apply to the problem (a precondition or the goal fails)."""
@@ -57,6 +60,8 @@ class _SupportTracker:
         self.index: dict[str, dict[S.Atom, None]] = defaultdict(dict)
         self.cache: dict[tuple[S.Atom, bool], tuple[bool, frozenset]] = {}
         self.guards: dict[tuple, list[S.Atom]] = {}  # (:meth:`bindings`; the state's atoms aside)
+        self.position = {name: i for i, name in enumerate(objects)}
+        self.fresh = itertools.count()  # renamed quantified variables of expanded guards
 
     def set_state(self, state: set[S.Atom]) -> None:
         self.state = state
@@ -112,7 +117,7 @@ class _SupportTracker:
             # (the others hold trivially, with no support).
             polarity = negate if existential else not negate
             outer = _outer(env, f.params)
-            for binding in self.bindings(f.params, f.body, polarity, outer):
+            for binding in self.bindings(f.params, f.body, polarity, outer, existential):
                 ok, sup = self.holds(f.body, negate, {**outer, **binding} if outer else binding)
                 if existential and ok:
                     return True, sup
@@ -161,18 +166,23 @@ class _SupportTracker:
                 support |= why
         return negate, frozenset(support)
 
-    def bindings(self, params: tuple[S.Typed, ...], body, negate: bool = False, env=None):
+    def bindings(
+        self, params: tuple[S.Typed, ...], body, negate: bool = False, env=None, only=False
+    ):
         """Candidate bindings for quantified variables: those under which ``body`` (negated
         if ``negate``; its other free variables: ``env``) can be true, joined from the state
         atoms that must then hold; every object combination when those atoms do not bind all
-        the variables."""
+        the variables.
+
+        ``only``: the caller needs only the bindings under which ``body`` is true (an
+        existential asks for the first, a conditional effect fires where its condition
+        holds), not the support of those where it is false.  Then a derived atom and an
+        existential of ``body`` guard it by what they must rest on (:meth:`_expanded`),
+        and the bindings come in the order of every object combination: the Cook's
+        ``press-on``, ``(forall (?o) (when (on ?o stove) ...))``, tried each of 16,000
+        objects of a cluttered kitchen's optimistic problem for the derived ``on``."""
         names = [p.name for p in params]
-        key = (body, negate)
-        positives = self.guards.get(key)
-        if positives is None:
-            positives = self.guards[key] = self._guards(body, negate, [])
-        if env:
-            positives = [_ground(a, env) for a in positives]
+        positives = self._guard_atoms(body, negate, False, env)
         covered = {t.name for x in positives for t in x.args if isinstance(t, S.Var)}
         if positives and set(names) <= covered:
             seen = set()
@@ -183,29 +193,65 @@ class _SupportTracker:
                 seen.add(key)
                 yield {n: S.Const(v) for n, v in zip(names, key)}
             return
+        if only:
+            positives = self._guard_atoms(body, negate, True, env)
+            covered = {t.name for x in positives for t in x.args if isinstance(t, S.Var)}
+        if only and positives and set(names) <= covered:
+            where = self.position
+            keys = {tuple(b.get(n) for n in names) for b in self._join(positives, {})}
+            # the order of itertools.product over the objects, among those it would give
+            found = sorted(
+                (tuple(where[v] for v in key), key)
+                for key in keys
+                if all(v in where for v in key)
+            )  # fmt: skip
+            for _order, key in found:
+                yield {n: S.Const(v) for n, v in zip(names, key)}
+            return
         for combo in itertools.product(self.objects, repeat=len(names)):
             yield {n: S.Const(v) for n, v in zip(names, combo)}
 
-    def _guards(self, f, negate: bool, out: list) -> list:
+    def _guard_atoms(self, body, negate: bool, expand: bool, env) -> list[S.Atom]:
+        key = (body, negate, expand)
+        positives = self.guards.get(key)
+        if positives is None:
+            positives = self.guards[key] = self._guards(body, negate, [], expand)
+        if env:
+            positives = [_ground(a, env) for a in positives]
+        return positives
+
+    def _guards(self, f, negate: bool, out: list, expand: bool = False, depth: int = 0) -> list:
         """Atoms of the state (not derived, not equalities) that must all be true for ``f``
-        (negated if ``negate``) to be true."""
+        (negated if ``negate``) to be true.  With ``expand``, also those a true derived atom
+        of one axiom and a true existential rest on (:meth:`_expanded`)."""
         if isinstance(f, S.Atom):
-            if (
-                not negate
-                and f.pred != "="
-                and f.pred not in self.axioms
-                and f.pred not in self.unknown
-            ):
+            if negate or f.pred == "=" or f.pred in self.unknown:
+                return out
+            if f.pred not in self.axioms:
                 out.append(f)
+            elif expand and depth < EXPAND_DEPTH and len(self.axioms[f.pred]) == 1:
+                out.extend(self._expanded(f, self.axioms[f.pred][0], depth))
         elif isinstance(f, S.Not):
-            self._guards(f.arg, not negate, out)
+            self._guards(f.arg, not negate, out, expand, depth)
         elif isinstance(f, S.And) and not negate or isinstance(f, S.Or) and negate:
             for part in f.args:
-                self._guards(part, negate, out)
+                self._guards(part, negate, out, expand, depth)
         elif isinstance(f, S.Imply) and negate:  # not (A -> B) = A and not B
-            self._guards(f.left, False, out)
-            self._guards(f.right, True, out)
+            self._guards(f.left, False, out, expand, depth)
+            self._guards(f.right, True, out, expand, depth)
+        elif expand and isinstance(f, S.Exists | S.Forall) and isinstance(f, S.Exists) != negate:
+            # some binding of its variables makes the body true: they become join variables
+            fresh = {p.name: S.Var(f"{p.name}#{next(self.fresh)}") for p in f.params}
+            self._guards(substitute(f.body, fresh), negate, out, expand, depth)
         return out
+
+    def _expanded(self, atom: S.Atom, axiom: S.Axiom, depth: int) -> list[S.Atom]:
+        """The state atoms that must be true for the derived ``atom`` to be true, as its one
+        axiom's body rests on them: the axiom's parameters are ``atom``'s arguments, its
+        quantified variables fresh ones (named with a ``#``, never a PDDL name)."""
+        inner = self._guards(axiom.body, False, [], True, depth + 1)
+        args = {p.name: t for p, t in zip(axiom.parameters, atom.args)}
+        return [_ground(a, args) for a in inner]
 
     def _join(self, atoms, binding):
         if not atoms:
@@ -277,7 +323,7 @@ def _apply(
     elif isinstance(effect, S.Forall):
         # A conditional effect fires where its condition holds; an unconditional one everywhere.
         guard = effect.body.condition if isinstance(effect.body, S.When) else None
-        for binding in ev.bindings(effect.params, guard):
+        for binding in ev.bindings(effect.params, guard, only=True):
             _apply(substitute(effect.body, binding), state, ev, adds, dels, costs)
     elif isinstance(effect, S.NumericEffect):
         if isinstance(effect.value, S.FuncTerm):
