@@ -60,7 +60,10 @@ class _SupportTracker:
         self.index: dict[str, dict[S.Atom, None]] = defaultdict(dict)
         self.cache: dict[tuple[S.Atom, bool], tuple[bool, frozenset]] = {}
         self.guards: dict[tuple, list[S.Atom]] = {}  # (:meth:`bindings`; the state's atoms aside)
-        self.position = {name: i for i, name in enumerate(objects)}
+        # where each object first comes (a constant may also be an object): the product's order
+        self.position: dict[str, int] = {}
+        for i, name in enumerate(objects):
+            self.position.setdefault(name, i)
         self.fresh = itertools.count()  # renamed quantified variables of expanded guards
 
     def set_state(self, state: set[S.Atom]) -> None:
