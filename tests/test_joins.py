@@ -174,3 +174,21 @@ def test_an_object_on_the_table_is_not_cooked():
     assert [
         b["?o"].name for b in tracker.bindings(effect.params, effect.body.condition, only=True)
     ] == ["b"]
+
+
+def test_a_constant_listed_among_the_objects_keeps_its_first_place():
+    # the preimage's object list is the problem's objects and then the domain's constants, so
+    # an object that is also a constant comes twice; the walk over every object meets it first
+    domain = parse_domain(STOVE)
+    init = ["(atpose s ps)", "(supports ps stove)", "(atpose z pz)", "(supports pz stove)"]
+    problem = stove_problem("s z ps pz", *init)
+    objects = [o.name for o in problem.objects] + ["stove", "s"]
+    tracker = _SupportTracker(domain, objects, set())
+    tracker.set_state({f for f in problem.init if isinstance(f, S.Atom)})
+    press = next(a for a in domain.actions if a.name == "press")
+    effect = next(e for e in press.effect.args if isinstance(e, S.Forall))
+    guard = effect.body.condition
+    found = [b["?o"].name for b in tracker.bindings(effect.params, guard, only=True)]
+    every = [b["?o"].name for b in tracker.bindings(effect.params, guard)]
+    walked = [o for o in every if tracker.holds(guard, env={"?o": S.Const(o)})[0]]
+    assert found == list(dict.fromkeys(walked)) == ["s", "z"]
