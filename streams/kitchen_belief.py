@@ -65,55 +65,37 @@ class BeliefStreams:
         )
         yield from self._clear_first(o, regions)
 
-    def _hiders(self, o: str, obs: Observation) -> int:
-        """How many localized objects, where they stand now, hide region ``obs`` (``test-vis``
-        fails): the boxes a plan must move before it detects ``o`` there."""
-        return sum(not self.test_vis(o, obs, o2, pb2) for o2, pb2 in sorted(self.obstacles.items()))
-
     def _clear_now(self, o: str, obs: Observation) -> bool:
         """No localized object, where it stands now, hides region ``obs`` (``test-vis``)."""
-        return self._hiders(o, obs) == 0
+        return all(self.test_vis(o, obs, o2, pb2) for o2, pb2 in sorted(self.obstacles.items()))
 
     def _clear_first(self, o: str, regions: Iterator[tuple[Observation]]) -> Iterator:
         """``regions`` (heaviest first), taking turns: the heaviest one the objects standing
-        now leave in view, then a hidden one, and so on.  Heaviest first alone, a box in front
-        of most of the block's particles made every draw a region behind it: a plan that
-        detects the block where everything stands (a replan keeping the last plan's structure)
-        failed ``test-vis`` once per level -- Cook's constrained attempts climbed levels 7 to
-        12 and timed out.  The hidden regions still come, one every other draw, for plans that
-        move boxes first: the one behind the fewest boxes among the next :data:`LOOKAHEAD`
-        (the heaviest of those).  With six boxes around the block, the heaviest hidden region
-        was often behind three or four of them, and plan after plan moved one box and failed
-        ``test-vis`` on the next.  A kind not found among the next :data:`LOOKAHEAD` regions
-        gives its turn to the heaviest one drawn; without localized objects the order is
-        heaviest first, as before."""
+        now leave in view, then the heaviest one they hide, and so on.  Heaviest first alone,
+        a box in front of most of the block's particles made every draw a region behind it:
+        a plan that detects the block where everything stands (a replan keeping the last
+        plan's structure) failed ``test-vis`` once per level -- Cook's constrained attempts
+        climbed levels 7 to 12 and timed out.  The hidden regions still come, one every
+        other draw, for plans that move the box first.  A kind not found among the next
+        :data:`LOOKAHEAD` regions gives its turn to the heaviest one drawn; without localized
+        objects the order is heaviest first, as before."""
         if not self.obstacles:
             yield from regions
             return
         regions = iter(regions)
-        ahead: list[tuple[int, tuple]] = []  # drawn, not yet given: (objects hiding it, region)
-        want_clear, more = True, True
+        ahead: list[tuple[bool, tuple]] = []  # drawn, not yet given: (clear now?, region)
+        want, more = True, True
         while True:
-            while more and len(ahead) < LOOKAHEAD and not self._found(ahead, want_clear):
+            while more and len(ahead) < LOOKAHEAD and all(c != want for c, _ in ahead):
                 out = next(regions, None)
                 more = out is not None
                 if more:
-                    ahead.append((self._hiders(o, out[0]), out))
+                    ahead.append((self._clear_now(o, out[0]), out))
             if not ahead:
                 return
-            if want_clear:
-                pick = next((k for k, (h, _) in enumerate(ahead) if h == 0), 0)
-            else:
-                hidden = [(h, k) for k, (h, _) in enumerate(ahead) if h > 0]
-                pick = min(hidden)[1] if hidden else 0
+            pick = next((k for k, (c, _) in enumerate(ahead) if c == want), 0)
             yield ahead.pop(pick)[1]
-            want_clear = not want_clear
-
-    @staticmethod
-    def _found(ahead: list[tuple[int, tuple]], want_clear: bool) -> bool:
-        """Whether ``ahead`` holds the region wanted next: one in view, or one behind a single
-        object (none can be behind fewer)."""
-        return any(h == (0 if want_clear else 1) for h, _ in ahead)
+            want = not want
 
     def _seeable(self, o: str, pb: PoseBelief, s: str) -> np.ndarray:
         key = (pb.digest, s)
