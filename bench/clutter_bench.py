@@ -22,10 +22,13 @@ import os
 import subprocess
 import sys
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 
-def one(path: str, seed: int, variant: str, budget: float, max_cycles: int) -> dict:
+def one(
+    path: str, seed: int, variant: str, budget: float, max_cycles: int, attempt: float | None
+) -> dict:
     """One episode in this process: its outcome, counts and the largest compiled problem."""
     import resource
 
@@ -46,6 +49,8 @@ def one(path: str, seed: int, variant: str, budget: float, max_cycles: int) -> d
     episode = make_episode(path, seed)
     try:
         settings = PolicySettings(variant=variant, budget=budget, max_cycles=max_cycles)
+        if attempt is not None:
+            settings = replace(settings, unconstrained_time=attempt)
         result = run_policy(episode, settings)
     finally:
         episode.close()
@@ -62,6 +67,8 @@ def one(path: str, seed: int, variant: str, budget: float, max_cycles: int) -> d
         resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,
     )
     out["peak_mib"] = round(peak / 1024, 1)  # ru_maxrss is in KiB on Linux
+    if attempt is not None:
+        out["unconstrained_time"] = attempt
     return out
 
 
@@ -70,6 +77,8 @@ def run_episode(path: Path, seed: int, args) -> dict:
     cmd = [sys.executable, __file__, "--one", str(path), str(seed)]
     cmd += ["--variant", args.variant, "--budget", str(args.budget)]
     cmd += ["--max-cycles", str(args.max_cycles)]
+    if args.unconstrained_time is not None:
+        cmd += ["--unconstrained-time", str(args.unconstrained_time)]
     try:
         proc = subprocess.run(
             cmd, capture_output=True, text=True, env=os.environ, timeout=2 * args.budget + 300
@@ -188,6 +197,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variant", default="both")
     ap.add_argument("--budget", type=float, default=600.0, help="planning time per episode, s")
     ap.add_argument("--max-cycles", type=int, default=100)
+    ap.add_argument(
+        "--unconstrained-time",
+        type=float,
+        metavar="S",
+        help="limit of each unconstrained planning attempt (default: the policy's, 300 s)",
+    )
     ap.add_argument("--workers", type=int, default=1, help="episodes at once (one core each)")
     ap.add_argument(
         "--jsonl",
@@ -203,8 +218,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--one", nargs=2, metavar=("FILE", "SEED"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.unconstrained_time is not None and not args.unconstrained_time > 0:
+        ap.error(f"--unconstrained-time must be positive (got {args.unconstrained_time:g})")
     if args.one:
-        out = one(args.one[0], int(args.one[1]), args.variant, args.budget, args.max_cycles)
+        out = one(
+            args.one[0], int(args.one[1]), args.variant, args.budget, args.max_cycles,
+            args.unconstrained_time,
+        )  # fmt: skip
         print(json.dumps(out))
         return 0
     if args.full:

@@ -25,7 +25,6 @@ from ssr_compile.belief.observation import (
     visibility_lower_bound,
     visibility_mask,
 )
-from ssr_compile.belief.observation import _pose_visibility as pose_visibility
 from ssr_compile.belief.particles import PoseBelief
 
 from .kitchen_motion import conf_key, same_conf
@@ -36,8 +35,6 @@ C_DETECT, C_RECOVER = BELIEF.c_detect, BELIEF.c_recover  # c: one detection; c':
 MAX_OBS_COST = 100.0  # a detection at p < ~1% is no option (and keeps planner costs small)
 FAR_AWAY = (-3.0, -3.0, 0.0)  # a base configuration out of the camera's view
 LOOKAHEAD = 8  # regions sample-obs draws ahead looking for one in view, or one hidden
-SIGHT_PARTICLES = 200  # the heaviest particles of a sought object a placement is checked on
-SIGHT_MASS = 0.02  # a placement hiding more of a sought object's probability is in its sight
 
 
 class BeliefStreams:
@@ -108,43 +105,6 @@ class BeliefStreams:
                 )  # fmt: skip
             self._seeable_cache[key] = mask
         return self._seeable_cache[key]
-
-    def _sight_particles(self, o: str, pb: PoseBelief) -> np.ndarray:
-        """Indices of the heaviest :data:`SIGHT_PARTICLES` particles of ``pb`` the fixed
-        camera sees past the furniture (:meth:`_seeable`, on each surface with some mass)."""
-        key = ("sight", pb.digest)
-        if key not in self._seeable_cache:
-            seen = np.zeros(len(pb), dtype=bool)
-            for s in sorted(set(pb.surface_names[pb.weights > 0].tolist())):
-                if s in self.world.surfaces:
-                    seen |= (pb.surface_names == s) & (pb.weights > 0) & self._seeable(o, pb, s)
-            idx = np.flatnonzero(seen)
-            order = np.argsort(-pb.weights[idx], kind="stable")[:SIGHT_PARTICLES]
-            self._seeable_cache[key] = idx[order]
-        return self._seeable_cache[key]
-
-    def _sight_loss(self, o: str, pb: PoseBelief) -> float:
-        """How much of the probability of the objects the robot still looks for (``sought``)
-        ``o`` placed at ``pb`` (a point belief) would hide from the camera, of the particles
-        it sees now past the furniture (the most over the objects).  A box put down between
-        the camera and the block's particles failed ``test-vis`` on the next detection: of a
-        six-box Cook's 607 failed ``test-vis`` in 13 cycles, 230 were on placements just
-        drawn."""
-        w = self.world
-        p = self.obj_pose(pb)
-        loss = 0.0
-        for o2, pb2 in sorted(self.sought.items()):
-            idx = self._sight_particles(o2, pb2) if o2 != o else ()
-            if len(idx) == 0:
-                continue
-            with self.planning(p.surface if p.surface in DRAWERS else None):
-                w.set_base(FAR_AWAY)
-                w.place_object(o, p.surface, p.rel)
-                seen = pose_visibility(
-                    pb2.poses[idx], w.camera, w.half_extents[o2], (w.objects[o2],), 0.5
-                )
-            loss = max(loss, float(pb2.weights[idx][~seen].sum()))
-        return loss
 
     def update_belief(self, o: str, pb1: PoseBelief, obs: Observation, s: str):
         if not o == pb1.obj == obs.obj:

@@ -42,7 +42,7 @@ from ssr_compile.sim.world import DRAWER_TRAVEL, DRAWERS, World
 from ssr_compile.belief.particles import PoseBelief
 from ssr_compile.stream import StreamInfo, StreamsModule
 
-from .kitchen_belief import C_DETECT, SIGHT_MASS, BeliefStreams
+from .kitchen_belief import C_DETECT, BeliefStreams
 from .kitchen_motion import ArmConf, MotionStreams, conf_key
 
 # A placement this close (m, rad) to one the true world refused is not proposed again.
@@ -86,8 +86,6 @@ class KitchenModule(MotionStreams, BeliefStreams):
         self._seeable_cache: dict = {}
         # localized objects at rest and their beliefs (set by a closed-loop agent each cycle)
         self.obstacles: dict[str, PoseBelief] = {}
-        # the objects it still looks for (not localized, not held) and their beliefs (the same)
-        self.sought: dict[str, PoseBelief] = {}
         # those of them the robot has put down itself (set by the agent too; see :meth:`_kin`)
         self.settled: set[str] = set()
         # placements the true world refused (object, point belief), recorded by the agent
@@ -212,30 +210,20 @@ class KitchenModule(MotionStreams, BeliefStreams):
         where it believes them (the planner's ``test-cfree``) when one of :data:`CLEAR_TRIES`
         draws is: a crowded counter refused most placements drawn blind to them, each refusal
         a stream plan that failed.  A placement where an object stands is still drawn after
-        that many (the plan may move the object first).  Of the clear draws, the first that
-        hides at most :data:`~.kitchen_belief.SIGHT_MASS` of the objects the robot still looks
-        for (:meth:`_sight_loss`) is taken, else the one hiding least of the
-        :data:`CLEAR_TRIES`."""
-        blocked, best = 0, None  # draws since the last output; (loss, belief) the least in sight
+        that many (the plan may move the object first)."""
+        blocked = 0  # draws in a row that lay on a localized object
         for out in self._each(lambda: self.ks.sample_placements(o, s), s if s in DRAWERS else None):
             # ``None``: the sampler's attempts ran out this time (see :meth:`_each`)
             pb = None if out is None else self.belief_of(out[0])
             if pb is None or self.refused(o, pb):
                 yield None
                 continue
-            if self._clear(o, pb):
-                loss = self._sight_loss(o, pb)
-                if loss <= SIGHT_MASS:
-                    blocked, best = 0, None
-                    yield (pb,)
+            if not self._clear(o, pb):
+                blocked += 1
+                if blocked < CLEAR_TRIES:
                     continue
-                if best is None or loss < best[0]:
-                    best = (loss, pb)
-            blocked += 1
-            if blocked < CLEAR_TRIES:
-                continue
-            yield (pb,) if best is None else (best[1],)
-            blocked, best = 0, None
+            blocked = 0
+            yield (pb,)
 
     def _clear(self, o: str, pb: PoseBelief) -> bool:
         """``o`` at ``pb`` is clear of every object localized at rest (``test-cfree``)."""
@@ -377,7 +365,7 @@ class KitchenModule(MotionStreams, BeliefStreams):
                 yield None
 
     def _placements_here(self, o, s, g, bq, w, sr, mount):
-        found, sighted = False, 0
+        found = False
         for _ in range(self.ks.max_attempts):
             with self.planning(s if s in DRAWERS else None):
                 frame = w.surface_frame(s)
@@ -393,9 +381,6 @@ class KitchenModule(MotionStreams, BeliefStreams):
             pb = self.belief_of(p)
             if self.refused(o, pb) or not self._clear(o, pb):
                 continue  # (before the IK: a placement on another object is not worth it)
-            if sighted < CLEAR_TRIES and self._sight_loss(o, pb) > SIGHT_MASS:
-                sighted += 1  # (in the sight of a sought object: after CLEAR_TRIES of them)
-                continue
             path = self._kin(o, pb, g, bq)
             if path is not None:
                 found = True

@@ -199,9 +199,6 @@ class KitchenAgent:
         self.km.holding = k.held
         self.km.arm_now = tuple(k.arm)
         self.km.obstacles = {o: pb for o, pb in k.beliefs.items() if o != held and is_localized(pb)}
-        self.km.sought = {
-            o: pb for o, pb in k.beliefs.items() if o != held and not is_localized(pb)
-        }
         self.km.settled = set(self.placed) & set(self.km.obstacles)
         module = StreamsModule(
             "ssr_compile.streams.kitchen_module",
