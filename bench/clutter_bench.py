@@ -12,6 +12,10 @@ saw (facts / objects), and the peak resident memory of an episode's process tree
     python bench/clutter_bench.py --objects 2 --hiders 1 --seeds 0      # smoke run
     python bench/clutter_bench.py --kind cook --objects 2 4 6 8 12 --hiders 1 2 4 6 --seeds 0-9
     python bench/clutter_bench.py --full    # N 2-12 (even), K 1, 2, 4, 6, seeds 0-9: days
+    python bench/clutter_bench.py --objects 8 --hiders 6 --seeds 0-9 --unconstrained-time 120
+
+``--unconstrained-time S`` runs the policy with another limit of each unconstrained attempt
+(``ssr-compile run --unconstrained-time``; default 300 s), kept in each episode's record.
 """
 
 from __future__ import annotations
