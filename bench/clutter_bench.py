@@ -244,6 +244,13 @@ def main(argv: list[str] | None = None) -> int:
         with open(args.jsonl) as f:
             records = [json.loads(line) for line in f if line.strip()]
     if not args.report:
+        other = {r.get("unconstrained_time") for r in records} - {args.unconstrained_time}
+        if other:
+            ap.error(
+                f"{args.jsonl} holds episodes run with another --unconstrained-time "
+                f"({', '.join('default' if t is None else f'{t:g}' for t in sorted(other, key=str))}); "
+                "resume them with the same setting or write another file"
+            )
         done = {(r["kind"], r["objects"], r["hiders"], r["seed"]) for r in records}
         journal = open(args.jsonl, "a") if args.jsonl else None  # noqa: SIM115
         with tempfile.TemporaryDirectory() as tmp:
