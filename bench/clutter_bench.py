@@ -31,7 +31,12 @@ from pathlib import Path
 
 
 def one(
-    path: str, seed: int, variant: str, budget: float, max_cycles: int, attempt: float | None
+    path: str,
+    seed: int,
+    variant: str,
+    budget: float,
+    max_cycles: int,
+    unconstrained_time: float | None,
 ) -> dict:
     """One episode in this process: its outcome, counts and the largest compiled problem."""
     import resource
@@ -53,8 +58,8 @@ def one(
     episode = make_episode(path, seed)
     try:
         settings = PolicySettings(variant=variant, budget=budget, max_cycles=max_cycles)
-        if attempt is not None:
-            settings = replace(settings, unconstrained_time=attempt)
+        if unconstrained_time is not None:
+            settings = replace(settings, unconstrained_time=unconstrained_time)
         result = run_policy(episode, settings)
     finally:
         episode.close()
@@ -71,8 +76,8 @@ def one(
         resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,
     )
     out["peak_mib"] = round(peak / 1024, 1)  # ru_maxrss is in KiB on Linux
-    if attempt is not None:
-        out["unconstrained_time"] = attempt
+    if unconstrained_time is not None:
+        out["unconstrained_time"] = unconstrained_time
     return out
 
 
@@ -246,10 +251,10 @@ def main(argv: list[str] | None = None) -> int:
     if not args.report:
         other = {r.get("unconstrained_time") for r in records} - {args.unconstrained_time}
         if other:
+            named = sorted("default" if t is None else f"{t:g}" for t in other)
             ap.error(
                 f"{args.jsonl} holds episodes run with another --unconstrained-time "
-                f"({', '.join('default' if t is None else f'{t:g}' for t in sorted(other, key=str))}); "
-                "resume them with the same setting or write another file"
+                f"({', '.join(named)}); resume them with the same setting or write another file"
             )
         done = {(r["kind"], r["objects"], r["hiders"], r["seed"]) for r in records}
         journal = open(args.jsonl, "a") if args.jsonl else None  # noqa: SIM115
